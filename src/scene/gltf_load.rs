@@ -1,0 +1,214 @@
+//! glTF 2.0 (`.gltf` and `.glb`) to [`Scene`].
+//!
+//! - Every triangle primitive becomes a [`Mesh`] in world space (node transforms applied).
+//! - A material with a non-zero `emissiveFactor` (times `KHR_materials_emissive_strength`
+//!   when present) makes its meshes area lights. Their `cos^n` exponent is the
+//!   material's `extras.cosn` (a number >= 0; absent means 0, a diffuse emitter).
+//! - `KHR_lights_punctual` point and spot lights are read; directional lights are
+//!   rejected (they have no position to emit from).
+//! - The first perspective camera found becomes [`Scene::camera`].
+//! - Textures are ignored: only the constant factors are read.
+
+use super::{Camera, Emission, Light, Material, PointLight, Scene, SpotLight};
+use crate::brdf::{Brdf, Lambert};
+use crate::emitter::CosN;
+use crate::error::{Error, Result};
+use glam::{Mat4, Vec3};
+use std::path::Path;
+
+pub(super) fn load_path(path: &Path) -> Result<Scene> {
+    let load_err = |e: Box<dyn std::error::Error + Send + Sync>| Error::Load {
+        path: path.to_path_buf(),
+        source: e,
+    };
+    let bytes = std::fs::read(path).map_err(|e| Error::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    load_slice(&bytes, Some(base)).map_err(|e| match e {
+        Error::Load { source, .. } => load_err(source),
+        other => other,
+    })
+}
+
+/// Loads from bytes; `base` resolves relative buffer URIs.
+pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
+    let wrap = |e: gltf::Error| Error::Load {
+        path: base.map(Path::to_path_buf).unwrap_or_default(),
+        source: Box::new(e),
+    };
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(wrap)?;
+    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(wrap)?;
+    let doc = &gltf.document;
+
+    let mut scene = Scene::new();
+    let mut material_ids = Vec::with_capacity(doc.materials().len());
+    for m in doc.materials() {
+        material_ids.push(scene.add_material(convert_material(&m)?));
+    }
+    let mut default_material = None;
+
+    let Some(root) = doc.default_scene().or_else(|| doc.scenes().next()) else {
+        return Err(Error::InvalidScene("the glTF file has no scene".into()));
+    };
+    let mut stack: Vec<(gltf::Node, Mat4)> = root.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    stack.reverse();
+    while let Some((node, parent)) = stack.pop() {
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if !world.is_finite() {
+            return Err(Error::InvalidScene(format!(
+                "node `{}` has a non-finite transform",
+                node.name().unwrap_or("?")
+            )));
+        }
+        if let Some(mesh) = node.mesh() {
+            for (pi, prim) in mesh.primitives().enumerate() {
+                if prim.mode() != gltf::mesh::Mode::Triangles {
+                    return Err(Error::InvalidScene(format!(
+                        "mesh `{}` primitive {pi} has mode {:?}; only triangle lists are supported",
+                        mesh.name().unwrap_or("?"),
+                        prim.mode()
+                    )));
+                }
+                let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+                let Some(positions) = reader.read_positions() else {
+                    return Err(Error::InvalidScene(format!(
+                        "mesh `{}` primitive {pi} has no POSITION attribute",
+                        mesh.name().unwrap_or("?")
+                    )));
+                };
+                let positions: Vec<Vec3> = positions
+                    .map(|p| world.transform_point3(Vec3::from(p)))
+                    .collect();
+                let flat: Vec<u32> = match reader.read_indices() {
+                    Some(i) => i.into_u32().collect(),
+                    None => (0..positions.len() as u32).collect(),
+                };
+                let indices = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                let material = match prim.material().index() {
+                    Some(i) => material_ids[i],
+                    None => *default_material.get_or_insert_with(|| {
+                        scene.add_material(Material {
+                            name: "default".into(),
+                            brdf: Brdf::Lambert(Lambert {
+                                albedo: Vec3::splat(0.8),
+                            }),
+                            emission: None,
+                        })
+                    }),
+                };
+                let name = format!("{}#{pi}", mesh.name().unwrap_or("mesh"));
+                scene.add_mesh(name, positions, indices, material)?;
+            }
+        }
+        if let Some(light) = node.light() {
+            scene.add_light(convert_light(&light, &world)?);
+        }
+        if let Some(cam) = node.camera() {
+            if let (gltf::camera::Projection::Perspective(p), None) =
+                (cam.projection(), scene.camera)
+            {
+                scene.camera = Some(Camera {
+                    eye: world.transform_point3(Vec3::ZERO),
+                    forward: world.transform_vector3(-Vec3::Z).normalize(),
+                    up: world.transform_vector3(Vec3::Y).normalize(),
+                    vfov_deg: p.yfov().to_degrees(),
+                });
+            }
+        }
+        let first_child = stack.len();
+        stack.extend(node.children().map(|c| (c, world)));
+        stack[first_child..].reverse();
+    }
+    // Nodes are visited depth-first in file order, so mesh (and Embree geometry) ids follow the file.
+    scene.validate()?;
+    Ok(scene)
+}
+
+fn convert_material(m: &gltf::Material) -> Result<Material> {
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, _] = pbr.base_color_factor();
+    let base = Vec3::new(r, g, b);
+    // Until the glTF metallic-roughness mapping lands, every surface is diffuse.
+    let brdf = Brdf::Lambert(Lambert {
+        albedo: base.clamp(Vec3::ZERO, Vec3::ONE),
+    });
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    let radiance = Vec3::from(m.emissive_factor()) * strength;
+    if !radiance.is_finite() || radiance.min_element() < 0.0 {
+        return Err(Error::InvalidScene(format!(
+            "material `{}` has an invalid emission {radiance}",
+            m.name().unwrap_or("?")
+        )));
+    }
+    let emission = if radiance.max_element() > 0.0 {
+        Some(Emission {
+            radiance,
+            profile: CosN::new(cosn_of(m)?)?,
+        })
+    } else {
+        None
+    };
+    Ok(Material {
+        name: m.name().unwrap_or("unnamed").to_string(),
+        brdf,
+        emission,
+    })
+}
+
+/// `extras.cosn` of a material, 0 when absent.
+fn cosn_of(m: &gltf::Material) -> Result<f32> {
+    let Some(raw) = m.extras() else {
+        return Ok(0.0);
+    };
+    let value: serde_json::Value = serde_json::from_str(raw.get())
+        .map_err(|e| Error::param("cosn exponent", format!("extras are not valid JSON: {e}")))?;
+    match value.get("cosn") {
+        None => Ok(0.0),
+        Some(serde_json::Value::Number(n)) => Ok(n.as_f64().unwrap_or(f64::NAN) as f32),
+        Some(other) => Err(Error::param(
+            "cosn exponent",
+            format!(
+                "material `{}` has extras.cosn = {other}, not a number",
+                m.name().unwrap_or("?")
+            ),
+        )),
+    }
+}
+
+fn convert_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Result<Light> {
+    use gltf::khr_lights_punctual::Kind;
+    let intensity = Vec3::from(light.color()) * light.intensity();
+    if !intensity.is_finite() || intensity.min_element() < 0.0 {
+        return Err(Error::InvalidScene(format!(
+            "light `{}` has an invalid intensity {intensity}",
+            light.name().unwrap_or("?")
+        )));
+    }
+    let position = world.transform_point3(Vec3::ZERO);
+    match light.kind() {
+        Kind::Point => Ok(Light::Point(PointLight {
+            position,
+            intensity,
+        })),
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => {
+            let outer = outer_cone_angle.clamp(1e-4, std::f32::consts::FRAC_PI_2);
+            let inner = inner_cone_angle.clamp(0.0, outer);
+            Ok(Light::Spot(SpotLight {
+                position,
+                direction: world.transform_vector3(-Vec3::Z).normalize(),
+                intensity,
+                cos_inner: inner.cos(),
+                cos_outer: outer.cos(),
+            }))
+        }
+        Kind::Directional => Err(Error::InvalidScene(format!(
+            "light `{}` is directional; only point and spot lights are supported",
+            light.name().unwrap_or("?")
+        ))),
+    }
+}

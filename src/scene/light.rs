@@ -1,0 +1,227 @@
+//! Lights and photon emission from them.
+//!
+//! - [`AreaLight`]: an emissive mesh, radiance `L0 cos^n(theta)` about each
+//!   triangle's geometric normal, one-sided. Power `A L0 2 pi / (n + 2)`, exact.
+//! - [`PointLight`]: `KHR_lights_punctual` point, intensity `I` (W/sr), power `4 pi I`.
+//! - [`SpotLight`]: `KHR_lights_punctual` spot, full intensity inside the inner
+//!   cone, a smooth falloff to the outer cone; power
+//!   `2 pi I (1 - (cos_inner + cos_outer) / 2)` (pbrt-v4's approximation of the
+//!   smoothstep falloff, exact for a linear one).
+//!
+//! Punctual lights have no area: the adaptive mode uses `alpha_A = 1` for them.
+
+use super::{triangle_area, Emission, Mesh};
+use crate::emitter::CosN;
+use crate::sampling::{spherical_direction, uniform_triangle, Frame};
+use glam::Vec3;
+use std::f32::consts::PI;
+
+/// One photon leaving a light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmittedPhoton {
+    /// Where it starts.
+    pub origin: Vec3,
+    /// Unit direction of travel.
+    pub direction: Vec3,
+    /// The emitter's surface normal (area lights), to offset the origin.
+    pub normal: Option<Vec3>,
+    /// Power relative to the mean: the photon carries `weight * power / N`
+    /// when N photons are emitted (exactly 1 for area and point lights).
+    pub weight: Vec3,
+}
+
+/// An emissive mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AreaLight {
+    /// Index of the mesh in [`super::Scene::meshes`].
+    pub mesh: usize,
+    /// The emission.
+    pub emission: Emission,
+    /// Total area.
+    pub area: f32,
+    triangles: Vec<[Vec3; 3]>,
+    cdf: Vec<f32>,
+}
+
+impl AreaLight {
+    /// Builds the light of an emissive mesh; `None` when it has no area.
+    pub fn new(mesh: &Mesh, index: usize, emission: Emission) -> Option<Self> {
+        let triangles: Vec<[Vec3; 3]> = (0..mesh.indices.len()).map(|i| mesh.triangle(i)).collect();
+        let mut cdf = Vec::with_capacity(triangles.len());
+        let mut acc = 0.0f64;
+        for t in &triangles {
+            acc += triangle_area(*t) as f64;
+            cdf.push(acc as f32);
+        }
+        if acc <= 0.0 {
+            return None;
+        }
+        Some(AreaLight {
+            mesh: index,
+            emission,
+            area: acc as f32,
+            triangles,
+            cdf,
+        })
+    }
+
+    /// Changes the `cos^n` profile.
+    pub fn set_profile(&mut self, profile: CosN) {
+        self.emission.profile = profile;
+    }
+
+    /// Emitted power per channel.
+    pub fn power(&self) -> Vec3 {
+        self.emission.radiance * self.area * self.emission.profile.projected_integral()
+    }
+
+    /// Samples a photon: position area-uniform, direction `~ cos^(n+1)`.
+    /// `u_tri` picks the triangle.
+    pub fn sample(&self, u_tri: f32, u_pos: [f32; 2], u_dir: [f32; 2]) -> EmittedPhoton {
+        let target = u_tri * self.area;
+        let i = self
+            .cdf
+            .partition_point(|&c| c < target)
+            .min(self.triangles.len() - 1);
+        let [a, b, c] = self.triangles[i];
+        let (b0, b1) = uniform_triangle(u_pos);
+        let origin = a * b0 + b * b1 + c * (1.0 - b0 - b1);
+        let normal = (b - a).cross(c - a).normalize();
+        let local = self.emission.profile.sample_emission(u_dir);
+        EmittedPhoton {
+            origin,
+            direction: Frame::from_normal(normal).world_from_local(local),
+            normal: Some(normal),
+            weight: Vec3::ONE,
+        }
+    }
+}
+
+/// An isotropic point light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLight {
+    /// Position.
+    pub position: Vec3,
+    /// Radiant intensity per channel (W/sr).
+    pub intensity: Vec3,
+}
+
+/// A spot light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotLight {
+    /// Position.
+    pub position: Vec3,
+    /// Unit axis.
+    pub direction: Vec3,
+    /// Radiant intensity on the axis (W/sr).
+    pub intensity: Vec3,
+    /// Cosine of the inner cone angle.
+    pub cos_inner: f32,
+    /// Cosine of the outer cone angle.
+    pub cos_outer: f32,
+}
+
+impl SpotLight {
+    fn falloff(&self, cos_theta: f32) -> f32 {
+        if cos_theta >= self.cos_inner {
+            1.0
+        } else if cos_theta <= self.cos_outer {
+            0.0
+        } else {
+            let t = (cos_theta - self.cos_outer) / (self.cos_inner - self.cos_outer).max(1e-8);
+            t * t * (3.0 - 2.0 * t)
+        }
+    }
+}
+
+/// Any light of a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Light {
+    /// An emissive mesh.
+    Area(AreaLight),
+    /// A point light.
+    Point(PointLight),
+    /// A spot light.
+    Spot(SpotLight),
+}
+
+impl Light {
+    /// Emitted power per channel.
+    pub fn power(&self) -> Vec3 {
+        match self {
+            Light::Area(a) => a.power(),
+            Light::Point(p) => p.intensity * 4.0 * PI,
+            Light::Spot(s) => s.intensity * 2.0 * PI * (1.0 - 0.5 * (s.cos_inner + s.cos_outer)),
+        }
+    }
+
+    /// Emitting area; `None` for punctual lights.
+    pub fn area(&self) -> Option<f32> {
+        match self {
+            Light::Area(a) => Some(a.area),
+            _ => None,
+        }
+    }
+
+    /// Position of a punctual light.
+    pub fn position(&self) -> Option<Vec3> {
+        match self {
+            Light::Area(_) => None,
+            Light::Point(p) => Some(p.position),
+            Light::Spot(s) => Some(s.position),
+        }
+    }
+
+    /// A short name for reports.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Light::Area(_) => "area",
+            Light::Point(_) => "point",
+            Light::Spot(_) => "spot",
+        }
+    }
+
+    /// Samples an emitted photon: `u_sel` picks the triangle of an area light,
+    /// `u_pos` the point on it, `u_dir` the direction.
+    pub fn sample(&self, u_sel: f32, u_pos: [f32; 2], u_dir: [f32; 2]) -> EmittedPhoton {
+        match self {
+            Light::Area(a) => a.sample(u_sel, u_pos, u_dir),
+            Light::Point(p) => EmittedPhoton {
+                origin: p.position,
+                direction: {
+                    let z = 1.0 - 2.0 * u_dir[0];
+                    spherical_direction(z, 2.0 * PI * u_dir[1])
+                },
+                normal: None,
+                weight: Vec3::ONE,
+            },
+            Light::Spot(s) => {
+                // Uniform in the outer cone, weighted by the falloff.
+                let cos_t = 1.0 - u_dir[0] * (1.0 - s.cos_outer);
+                let local = spherical_direction(cos_t, 2.0 * PI * u_dir[1]);
+                let pdf = 1.0 / (2.0 * PI * (1.0 - s.cos_outer).max(1e-12));
+                let power = self.power();
+                let flux = s.intensity * s.falloff(cos_t) / pdf;
+                let weight = Vec3::new(
+                    ratio(flux.x, power.x),
+                    ratio(flux.y, power.y),
+                    ratio(flux.z, power.z),
+                );
+                EmittedPhoton {
+                    origin: s.position,
+                    direction: Frame::from_normal(s.direction).world_from_local(local),
+                    normal: None,
+                    weight,
+                }
+            }
+        }
+    }
+}
+
+fn ratio(a: f32, b: f32) -> f32 {
+    if b > 0.0 {
+        a / b
+    } else {
+        0.0
+    }
+}

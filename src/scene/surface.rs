@@ -1,0 +1,81 @@
+//! Area-uniform points on a scene's surfaces: the fixed evaluation points of the
+//! density statistics (SPEC §3) and the ray origins of `bench rays`.
+
+use super::{triangle_area, Scene};
+use crate::rng::{hash2, Rng};
+use glam::Vec3;
+
+/// A point on a surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    /// Position.
+    pub position: Vec3,
+    /// Unit geometric normal (winding side).
+    pub normal: Vec3,
+    /// Mesh index.
+    pub mesh: usize,
+}
+
+/// Samples points uniformly by area over every triangle of a scene.
+#[derive(Clone, Debug)]
+pub struct SurfaceSampler {
+    triangles: Vec<([Vec3; 3], usize)>,
+    cdf: Vec<f64>,
+    total: f64,
+}
+
+impl SurfaceSampler {
+    /// Builds the area table.
+    pub fn new(scene: &Scene) -> Self {
+        let mut triangles = Vec::new();
+        let mut cdf = Vec::new();
+        let mut acc = 0.0f64;
+        for (mi, m) in scene.meshes.iter().enumerate() {
+            for i in 0..m.indices.len() {
+                let t = m.triangle(i);
+                acc += triangle_area(t) as f64;
+                triangles.push((t, mi));
+                cdf.push(acc);
+            }
+        }
+        SurfaceSampler {
+            triangles,
+            cdf,
+            total: acc,
+        }
+    }
+
+    /// Total area.
+    pub fn total_area(&self) -> f64 {
+        self.total
+    }
+
+    /// One point from three uniforms.
+    pub fn sample(&self, u_sel: f64, u: [f32; 2]) -> Option<SurfacePoint> {
+        if self.triangles.is_empty() || self.total <= 0.0 {
+            return None;
+        }
+        let target = u_sel * self.total;
+        let i = self
+            .cdf
+            .partition_point(|&c| c < target)
+            .min(self.triangles.len() - 1);
+        let ([a, b, c], mesh) = self.triangles[i];
+        let (b0, b1) = crate::sampling::uniform_triangle(u);
+        Some(SurfacePoint {
+            position: a * b0 + b * b1 + c * (1.0 - b0 - b1),
+            normal: (b - a).cross(c - a).normalize(),
+            mesh,
+        })
+    }
+
+    /// `count` points fixed by `seed` (point `i` depends only on `seed` and `i`).
+    pub fn points(&self, count: usize, seed: u64) -> Vec<SurfacePoint> {
+        (0..count)
+            .filter_map(|i| {
+                let mut rng = Rng::new(hash2(seed ^ 0x5EED_5A4F, i as u64));
+                self.sample(rng.next_f64(), rng.next_2d())
+            })
+            .collect()
+    }
+}
