@@ -15,7 +15,7 @@ pub enum Error {
         message: String,
     },
     /// A scene file could not be read or parsed.
-    #[error("cannot load {}: {source}", path.display())]
+    #[error("cannot load {}", path.display())]
     Load {
         /// The file.
         path: PathBuf,
@@ -48,7 +48,7 @@ pub enum Error {
         budget_bytes: u64,
     },
     /// Reading or writing a file failed.
-    #[error("i/o error on {}: {source}", path.display())]
+    #[error("cannot access {}", path.display())]
     Io {
         /// The file.
         path: PathBuf,

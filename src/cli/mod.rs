@@ -1,6 +1,7 @@
 //! Subcommands, one file each.
 
 pub mod analyze;
+pub mod scene;
 
 use clap::{Parser, Subcommand};
 
@@ -16,10 +17,13 @@ pub struct Cli {
 pub enum Command {
     /// Analyse the directionality of a scene's emitters and BRDFs, or of named functions.
     Analyze(analyze::AnalyzeArgs),
+    /// Print what a scene holds: triangles, meshes, materials, lights, bounds.
+    Scene(scene::SceneArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Analyze(a) => analyze::run(a),
+        Command::Scene(a) => scene::run(a),
     }
 }
