@@ -1,1 +1,28 @@
-//! (in progress)
+//! The photon engine: wavefront tracing in three modes (SPEC §2.4–2.5).
+//!
+//! ```no_run
+//! use adaptive_pm::embree::Device;
+//! use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
+//! use adaptive_pm::scene::Scene;
+//!
+//! let scene = Scene::cornell()?;
+//! let device = Device::new()?;
+//! let rt = scene.commit(&device)?;
+//! let mut tracer = Tracer::new(&scene, &rt);
+//! let run = tracer.trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000)))?;
+//! println!("{} photons stored", run.report.stored);
+//! # Ok::<(), adaptive_pm::Error>(())
+//! ```
+
+pub mod config;
+pub mod counts;
+mod density_control;
+pub mod measure;
+pub mod report;
+pub mod tracer;
+pub mod wave;
+
+pub use config::{Budget, DensityTarget, Mode, TraceConfig};
+pub use measure::{measure, MapMetrics, Maps};
+pub use report::{DepthStats, TraceReport};
+pub use tracer::{Progress, TraceOutput, Tracer};

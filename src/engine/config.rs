@@ -1,0 +1,185 @@
+//! What a run is asked to do: the mode, the photon budget (Q or N_MAX), the
+//! bounds on splitting and on memory, and the seed.
+
+use crate::analysis::{AnalysisParams, Estimator};
+use crate::error::{Error, Result};
+
+/// `INT_MAX` of the paper's `N_MAX = Q^2 * INT_MAX`.
+pub const INT_MAX: u64 = i32::MAX as u64;
+
+/// Default bounce limit: deep enough that a white box keeps < 1 % of its power
+/// (0.73^15 ~ 0.9 %), shallow enough to bound albedo-1 scenes.
+pub const DEFAULT_MAX_DEPTH: u32 = 15;
+
+/// Default per-hit cap on children: a photon never splits into more than this.
+pub const DEFAULT_SPLIT_CAP: u32 = 4096;
+
+/// How many nearest photons the density-control acceptance test looks at
+/// (RenderPark's value).
+pub const DENSITY_CONTROL_K: usize = 20;
+
+/// The three ways of tracing compared in every experiment (SPEC §2.5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Mode {
+    /// Markov chains: `N_MAX` photons shared by power, Russian roulette, no splitting.
+    Classic,
+    /// Classic emission; a photon is stored only where the map is sparser than a target.
+    Density,
+    /// The paper's counts and splitting.
+    Adaptive,
+}
+
+impl Mode {
+    /// All modes, in the order experiments report them.
+    pub const ALL: [Mode; 3] = [Mode::Classic, Mode::Density, Mode::Adaptive];
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Classic => "classic",
+            Mode::Density => "density",
+            Mode::Adaptive => "adaptive",
+        }
+    }
+}
+
+impl std::str::FromStr for Mode {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "classic" => Ok(Mode::Classic),
+            "density" => Ok(Mode::Density),
+            "adaptive" => Ok(Mode::Adaptive),
+            _ => Err(Error::param(
+                "mode",
+                format!("`{s}` is not one of classic, density, adaptive"),
+            )),
+        }
+    }
+}
+
+/// The photon budget: the quality knob or `N_MAX` itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Budget {
+    /// Q in [0, 1]; `N_MAX = Q^2 * INT_MAX`.
+    Quality(f64),
+    /// `N_MAX` directly (the paper's experiments use 100 000).
+    NMax(u64),
+}
+
+impl Budget {
+    /// `N_MAX`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for Q outside [0, 1] or NaN.
+    pub fn n_max(self) -> Result<u64> {
+        match self {
+            Budget::Quality(q) if (0.0..=1.0).contains(&q) => {
+                Ok((q * q * INT_MAX as f64).round() as u64)
+            }
+            Budget::Quality(q) => Err(Error::param(
+                "quality",
+                format!("must be in [0, 1], got {q}"),
+            )),
+            Budget::NMax(n) => Ok(n),
+        }
+    }
+}
+
+/// Density control's target, in photons per unit area.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DensityTarget {
+    /// `N_MAX / total surface area`: the density if every emitted photon's
+    /// first hit were spread evenly over the scene.
+    Auto,
+    /// A given density (the experiments pass the classic mode's mean density
+    /// with a diffuse light).
+    PerArea(f64),
+}
+
+/// Everything a run needs besides the scene.
+#[derive(Clone, Debug)]
+pub struct TraceConfig {
+    /// Which algorithm.
+    pub mode: Mode,
+    /// Q or `N_MAX`.
+    pub budget: Budget,
+    /// Seed of every random number.
+    pub seed: u64,
+    /// Bounces after the first hit; photons at this depth are stored but not continued.
+    pub max_depth: u32,
+    /// Per-hit cap on children (adaptive mode).
+    pub split_cap: u32,
+    /// Memory allowed for photons, in bytes; `None` means half the available memory.
+    pub memory_budget: Option<u64>,
+    /// Which directionality estimator sets alpha_D (adaptive mode).
+    pub estimator: Estimator,
+    /// Constants of the directionality analysis.
+    pub analysis: AnalysisParams,
+    /// Target of density control.
+    pub density_target: DensityTarget,
+    /// Photons per parallel batch; results do not depend on it.
+    pub batch: usize,
+}
+
+impl TraceConfig {
+    /// A run of `mode` with `N_MAX` photons and every other setting at its default.
+    pub fn new(mode: Mode, budget: Budget) -> Self {
+        TraceConfig {
+            mode,
+            budget,
+            seed: 1,
+            max_depth: DEFAULT_MAX_DEPTH,
+            split_cap: DEFAULT_SPLIT_CAP,
+            memory_budget: None,
+            estimator: Estimator::Paper,
+            analysis: AnalysisParams::default(),
+            density_target: DensityTarget::Auto,
+            batch: 4096,
+        }
+    }
+
+    /// Checks the settings.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        self.budget.n_max()?;
+        if self.split_cap == 0 {
+            return Err(Error::param("split cap", "must be at least 1"));
+        }
+        if self.max_depth > 250 {
+            return Err(Error::param(
+                "max depth",
+                format!("must be at most 250, got {}", self.max_depth),
+            ));
+        }
+        if let DensityTarget::PerArea(d) = self.density_target {
+            if !(d.is_finite() && d > 0.0) {
+                return Err(Error::param(
+                    "density target",
+                    format!("must be a positive number, got {d}"),
+                ));
+            }
+        }
+        if self.batch == 0 {
+            return Err(Error::param("batch", "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// Bytes of available memory (Linux `MemAvailable`), or 4 GiB when unknown.
+pub fn available_memory() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("MemAvailable:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|kb| kb.parse::<u64>().ok())
+        })
+        .map(|kb| kb * 1024)
+        .unwrap_or(4 << 30)
+}

@@ -1,0 +1,120 @@
+//! What a run counted (SPEC §3): photons emitted, stored, re-emitted, split
+//! rates per depth, whether a bound was hit, and how long it took.
+
+use super::config::Mode;
+use super::counts::LightPlan;
+use crate::photon_map::PhotonRecord;
+
+/// Counters of one bounce depth (depth 0 = the photons leaving the lights).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct DepthStats {
+    /// Photons that hit a surface.
+    pub hits: u64,
+    /// Photons that left the scene.
+    pub escaped: u64,
+    /// Children created at those hits.
+    pub children: u64,
+    /// Hits where the per-hit cap bound.
+    pub capped: u64,
+    /// Photons stored at this depth.
+    pub stored: u64,
+    /// Luminance of the power stored at this depth.
+    pub stored_power_luminance: f64,
+    /// Wall time of the wave.
+    pub seconds: f64,
+}
+
+/// Counts and timings of a run.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct TraceReport {
+    /// The mode.
+    pub mode: Mode,
+    /// `N_MAX` of the run.
+    pub n_max: u64,
+    /// Photons emitted, all lights.
+    pub emitted: u64,
+    /// Photons emitted per light.
+    pub emitted_per_light: Vec<u64>,
+    /// Photons stored, all depths.
+    pub stored: u64,
+    /// Photons stored at their first hit.
+    pub stored_primary: u64,
+    /// Photons re-emitted from first hits (the paper's Fig. 8).
+    pub reemitted_first_hit: u64,
+    /// Mean children per hit at each depth (the paper's Fig. 9b).
+    pub split_rate_by_depth: Vec<f64>,
+    /// Counters per depth.
+    pub depths: Vec<DepthStats>,
+    /// True when the memory budget stopped splitting or the run.
+    pub budget_bound: bool,
+    /// Hits where the per-hit cap bound, all depths.
+    pub capped_hits: u64,
+    /// Density control: photons stored.
+    pub density_accepted: u64,
+    /// Density control: photons whose power went to their neighbours.
+    pub density_rejected: u64,
+    /// Sum of the stored photons' RGB power.
+    pub stored_power: [f64; 3],
+    /// Wall time of the whole trace.
+    pub trace_s: f64,
+    /// Wall time of wave 0 (emission and first hits): the primary map's trace.
+    pub trace_primary_s: f64,
+}
+
+impl TraceReport {
+    pub(super) fn new(mode: Mode, n_max: u64, plans: &[LightPlan]) -> Self {
+        TraceReport {
+            mode,
+            n_max,
+            emitted: plans.iter().map(|p| p.photons).sum(),
+            emitted_per_light: plans.iter().map(|p| p.photons).collect(),
+            stored: 0,
+            stored_primary: 0,
+            reemitted_first_hit: 0,
+            split_rate_by_depth: Vec::new(),
+            depths: Vec::new(),
+            budget_bound: false,
+            capped_hits: 0,
+            density_accepted: 0,
+            density_rejected: 0,
+            stored_power: [0.0; 3],
+            trace_s: 0.0,
+            trace_primary_s: 0.0,
+        }
+    }
+
+    pub(super) fn depth_mut(&mut self, depth: usize) -> &mut DepthStats {
+        if self.depths.len() <= depth {
+            self.depths.resize(depth + 1, DepthStats::default());
+        }
+        &mut self.depths[depth]
+    }
+
+    pub(super) fn finish(&mut self, records: &[PhotonRecord]) {
+        self.stored = records.len() as u64;
+        let mut power = [0.0f64; 3];
+        for d in &mut self.depths {
+            d.stored = 0;
+            d.stored_power_luminance = 0.0;
+        }
+        for r in records {
+            power[0] += r.power.x as f64;
+            power[1] += r.power.y as f64;
+            power[2] += r.power.z as f64;
+            let d = self.depth_mut(r.depth as usize);
+            d.stored += 1;
+            d.stored_power_luminance += crate::sampling::luminance(r.power) as f64;
+        }
+        self.stored_power = power;
+        self.stored_primary = self.depths.first().map_or(0, |d| d.stored);
+        self.reemitted_first_hit = self.depths.first().map_or(0, |d| d.children);
+        self.capped_hits = self.depths.iter().map(|d| d.capped).sum();
+        self.trace_primary_s = self.depths.first().map_or(0.0, |d| d.seconds);
+        self.split_rate_by_depth = self
+            .depths
+            .iter()
+            .filter(|d| d.hits > 0)
+            .map(|d| d.children as f64 / d.hits as f64)
+            .collect();
+    }
+}

@@ -1,0 +1,247 @@
+//! The wave loop: emission (wave 0), then one wave per bounce depth, until the
+//! queue is empty or the depth limit is reached.
+
+use super::config::{available_memory, DensityTarget, Mode, TraceConfig, DENSITY_CONTROL_K};
+use super::counts::{photon_power, plan_emission, LightPlan};
+use super::density_control::DensityControl;
+use super::report::TraceReport;
+use super::wave::{shade_batch, BatchOut, PathState, ShadeContext};
+use crate::analysis::{AnalysisCache, DirectionalityTable};
+use crate::embree::CommittedScene;
+use crate::error::{Error, Result};
+use crate::photon_map::PhotonRecord;
+use crate::rng::{hash2, Rng};
+use crate::sampling::luminance;
+use crate::scene::Scene;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Bytes one photon costs while a run is under way: its record, its queue
+/// entry, and its compact copy in the final map. Used to turn the memory
+/// budget into a photon count before anything is allocated.
+pub const BYTES_PER_PHOTON_IN_FLIGHT: u64 = (std::mem::size_of::<PhotonRecord>()
+    + std::mem::size_of::<PathState>()
+    + 16) as u64;
+
+/// Progress of a run, for a progress bar.
+#[derive(Clone, Copy, Debug)]
+pub struct Progress {
+    /// Bounce depth of the wave under way (0 = photons leaving the lights).
+    pub depth: u32,
+    /// Photons of this wave traced so far.
+    pub done: u64,
+    /// Photons in this wave.
+    pub total: u64,
+}
+
+/// The photons of a run and what it counted.
+#[derive(Clone, Debug)]
+pub struct TraceOutput {
+    /// Every stored photon, tagged with its depth, in a deterministic order.
+    pub records: Vec<PhotonRecord>,
+    /// Counts and timings.
+    pub report: TraceReport,
+    /// Per-light emission.
+    pub plans: Vec<LightPlan>,
+}
+
+/// Traces photons through one scene; keeps the directionality analyses
+/// between runs (each emission profile and BRDF is analysed once).
+pub struct Tracer<'s> {
+    scene: &'s Scene,
+    rt: &'s CommittedScene,
+    cache: AnalysisCache,
+}
+
+impl<'s> Tracer<'s> {
+    /// A tracer for `scene`, whose Embree geometry is `rt` (from [`Scene::commit`]).
+    pub fn new(scene: &'s Scene, rt: &'s CommittedScene) -> Self {
+        Tracer {
+            scene,
+            rt,
+            cache: AnalysisCache::default(),
+        }
+    }
+
+    /// The analyses done so far.
+    pub fn analysis_cache(&self) -> &AnalysisCache {
+        &self.cache
+    }
+
+    /// Traces one run on the current rayon pool.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for bad settings, [`Error::InvalidScene`] for a
+    /// scene without light, [`Error::Budget`] when the emitted photons alone
+    /// would not fit in the memory budget (Q = 1 on any real machine).
+    pub fn trace(&mut self, cfg: &TraceConfig) -> Result<TraceOutput> {
+        self.trace_with_progress(cfg, &|_| {})
+    }
+
+    /// [`Tracer::trace`] with a progress callback, called from worker threads.
+    ///
+    /// # Errors
+    /// As [`Tracer::trace`].
+    pub fn trace_with_progress(
+        &mut self,
+        cfg: &TraceConfig,
+        progress: &(dyn Fn(Progress) + Sync),
+    ) -> Result<TraceOutput> {
+        cfg.validate()?;
+        self.scene.validate()?;
+        if self.cache.params() != &cfg.analysis || self.cache.estimator() != cfg.estimator {
+            self.cache = AnalysisCache::new(cfg.analysis.clone(), cfg.estimator);
+        }
+        let n_max = cfg.budget.n_max()?;
+        let plans = plan_emission(self.scene, cfg.mode, n_max, &mut self.cache)?;
+        let emitted: u64 = plans.iter().map(|p| p.photons).sum();
+        let budget_bytes = cfg.memory_budget.unwrap_or_else(|| available_memory() / 2);
+        let max_photons = budget_bytes / BYTES_PER_PHOTON_IN_FLIGHT;
+        if emitted > max_photons {
+            return Err(Error::Budget {
+                photons: emitted,
+                needed_bytes: emitted.saturating_mul(BYTES_PER_PHOTON_IN_FLIGHT),
+                budget_bytes,
+            });
+        }
+        let tables = self.material_tables(cfg.mode)?;
+        let (lo, hi) = self.scene.bounds();
+        let epsilon = 1e-5 * (hi - lo).length().max(1e-3);
+        let max_light_luminance = self
+            .scene
+            .lights
+            .iter()
+            .map(|l| luminance(l.power()))
+            .fold(0.0f32, f32::max);
+
+        let mut report = TraceReport::new(cfg.mode, n_max, &plans);
+        let start = Instant::now();
+        let mut queue = self.emit(cfg, &plans, epsilon);
+        let mut records: Vec<PhotonRecord> = Vec::new();
+        let mut density = (cfg.mode == Mode::Density).then(|| {
+            let target = match cfg.density_target {
+                DensityTarget::PerArea(d) => d,
+                DensityTarget::Auto => {
+                    n_max as f64 / self.scene.surface_sampler().total_area().max(f64::MIN_POSITIVE)
+                }
+            };
+            DensityControl::new(self.scene.bounds(), target, DENSITY_CONTROL_K, emitted)
+        });
+        let mut splitting = cfg.mode == Mode::Adaptive;
+        for depth in 0..=cfg.max_depth {
+            if queue.is_empty() {
+                break;
+            }
+            let wave_start = Instant::now();
+            // Splitting stops once the photons so far fill half the budget; the
+            // rest of the run is then classic Russian roulette.
+            if splitting && (records.len() + queue.len()) as u64 * 2 > max_photons {
+                splitting = false;
+                report.budget_bound = true;
+            }
+            let ctx = ShadeContext {
+                scene: self.scene,
+                rt: self.rt,
+                tables: &tables,
+                alpha_min: cfg.analysis.alpha_min,
+                max_light_luminance,
+                n_max_refl: if splitting { n_max as f64 } else { 0.0 },
+                split_cap: cfg.split_cap,
+                continue_paths: depth < cfg.max_depth,
+                epsilon,
+                depth: depth as u8,
+            };
+            let done = AtomicU64::new(0);
+            let total = queue.len() as u64;
+            let outs: Vec<BatchOut> = queue
+                .par_chunks(cfg.batch)
+                .map(|batch| {
+                    let out = shade_batch(&ctx, batch);
+                    let d = done.fetch_add(batch.len() as u64, Ordering::Relaxed) + batch.len() as u64;
+                    progress(Progress { depth, done: d, total });
+                    out
+                })
+                .collect();
+            drop(queue);
+            let stored_here: usize = outs.iter().map(|o| o.stored.len()).sum();
+            if (records.len() + stored_here) as u64 > max_photons {
+                report.budget_bound = true;
+                break;
+            }
+            let mut next: Vec<PathState> =
+                Vec::with_capacity(outs.iter().map(|o| o.children.len()).sum());
+            let stats = report.depth_mut(depth as usize);
+            for out in outs {
+                stats.hits += out.hits;
+                stats.escaped += out.escaped;
+                stats.capped += out.capped;
+                stats.children += out.children.len() as u64;
+                match &mut density {
+                    Some(dc) => dc.offer(&out.stored, &out.normals),
+                    None => records.extend_from_slice(&out.stored),
+                }
+                next.extend_from_slice(&out.children);
+            }
+            stats.seconds = wave_start.elapsed().as_secs_f64();
+            queue = next;
+        }
+        if let Some(dc) = density {
+            let (accepted, rejected) = dc.counts();
+            report.density_rejected = rejected;
+            report.density_accepted = accepted;
+            records = dc.into_records();
+        }
+        report.trace_s = start.elapsed().as_secs_f64();
+        report.finish(&records);
+        Ok(TraceOutput {
+            records,
+            report,
+            plans,
+        })
+    }
+
+    /// alpha_D tables for the materials the scene's meshes use (adaptive mode only).
+    fn material_tables(&mut self, mode: Mode) -> Result<Vec<Option<Arc<DirectionalityTable>>>> {
+        let mut tables = vec![None; self.scene.materials.len()];
+        if mode != Mode::Adaptive {
+            return Ok(tables);
+        }
+        for mesh in &self.scene.meshes {
+            let m = mesh.material;
+            let brdf = &self.scene.materials[m].brdf;
+            if tables[m].is_none() && !brdf.is_delta() {
+                tables[m] = Some(self.cache.brdf(brdf)?);
+            }
+        }
+        Ok(tables)
+    }
+
+    /// Wave 0: every light's photons, photon `i` of light `l` keyed by (seed, l, i).
+    fn emit(&self, cfg: &TraceConfig, plans: &[LightPlan], epsilon: f32) -> Vec<PathState> {
+        let mut starts = Vec::with_capacity(plans.len());
+        let mut total = 0u64;
+        for p in plans {
+            starts.push(total);
+            total += p.photons;
+        }
+        let lights = &self.scene.lights;
+        (0..total)
+            .into_par_iter()
+            .map(|g| {
+                let l = starts.partition_point(|&s| s <= g) - 1;
+                let i = g - starts[l];
+                let key = hash2(hash2(cfg.seed, l as u64), i);
+                let mut rng = Rng::new(key);
+                let e = lights[l].sample(rng.next_f32(), rng.next_2d(), rng.next_2d());
+                PathState {
+                    origin: e.origin + e.normal.unwrap_or_default() * epsilon,
+                    direction: e.direction,
+                    power: photon_power(&lights[l], &plans[l]) * e.weight,
+                    key,
+                }
+            })
+            .collect()
+    }
+}

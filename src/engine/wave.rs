@@ -1,0 +1,145 @@
+//! One wave of the wavefront: every photon of a bounce depth, traced in
+//! parallel batches through Embree, then shaded: stored, and split or ended.
+//!
+//! Batches are independent and their outputs are concatenated in batch order;
+//! a photon's random numbers come from its key, so a wave's result does not
+//! depend on the thread count or the batch size.
+
+use super::counts::{expected_children, round_stochastic};
+use crate::analysis::DirectionalityTable;
+use crate::brdf::Brdf;
+use crate::embree::{CommittedScene, Hit, Ray};
+use crate::photon_map::PhotonRecord;
+use crate::rng::{hash2, Rng};
+use crate::sampling::{luminance, Frame};
+use crate::scene::Scene;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// A photon in flight.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathState {
+    /// Ray origin (already offset from the surface it leaves).
+    pub origin: Vec3,
+    /// Unit direction of travel.
+    pub direction: Vec3,
+    /// Power (flux) it carries.
+    pub power: Vec3,
+    /// Identity: seeds every random number this photon draws.
+    pub key: u64,
+}
+
+/// What shading needs to know about the run.
+pub(super) struct ShadeContext<'a> {
+    pub scene: &'a Scene,
+    pub rt: &'a CommittedScene,
+    /// alpha_D tables by material (adaptive mode); `None` for delta BRDFs.
+    pub tables: &'a [Option<Arc<DirectionalityTable>>],
+    /// Floor of alpha_D (delta BRDFs).
+    pub alpha_min: f32,
+    /// Luminance of the most powerful light: the photon's alpha_E is its power over it.
+    pub max_light_luminance: f32,
+    /// `N_MAX_refl = N_MAX` when splitting; 0 turns splitting off (classic modes, budget).
+    pub n_max_refl: f64,
+    /// Per-hit cap on children.
+    pub split_cap: u32,
+    /// Whether photons at this depth may have children.
+    pub continue_paths: bool,
+    /// Offset of new ray origins from surfaces.
+    pub epsilon: f32,
+    pub depth: u8,
+}
+
+/// The output of one batch.
+#[derive(Default)]
+pub(super) struct BatchOut {
+    pub stored: Vec<PhotonRecord>,
+    /// The shading normal (facing the photon's arrival side) of each stored photon.
+    pub normals: Vec<Vec3>,
+    pub children: Vec<PathState>,
+    pub hits: u64,
+    pub escaped: u64,
+    pub capped: u64,
+}
+
+pub(super) fn shade_batch(ctx: &ShadeContext, batch: &[PathState]) -> BatchOut {
+    let rays: Vec<Ray> = batch
+        .iter()
+        .map(|p| Ray {
+            origin: p.origin,
+            dir: p.direction,
+            tnear: 0.0,
+            tfar: f32::INFINITY,
+        })
+        .collect();
+    let mut hits: Vec<Option<Hit>> = vec![None; rays.len()];
+    ctx.rt.intersect_batch(&rays, &mut hits);
+    let mut out = BatchOut::default();
+    for (p, hit) in batch.iter().zip(&hits) {
+        match hit {
+            None => out.escaped += 1,
+            Some(h) => shade_hit(ctx, p, h, &mut out),
+        }
+    }
+    out
+}
+
+fn shade_hit(ctx: &ShadeContext, p: &PathState, h: &Hit, out: &mut BatchOut) {
+    out.hits += 1;
+    let position = p.origin + p.direction * h.t;
+    // Surfaces are two-sided: shade on the side the photon arrives from.
+    let n = if h.ng.dot(p.direction) > 0.0 { -h.ng } else { h.ng };
+    let material = h.material as usize;
+    let brdf: &Brdf = &ctx.scene.materials[material].brdf;
+    if !brdf.is_delta() {
+        out.stored.push(PhotonRecord {
+            position,
+            power: p.power,
+            direction: p.direction,
+            depth: ctx.depth,
+        });
+        out.normals.push(n);
+    }
+    if !ctx.continue_paths {
+        return;
+    }
+    let frame = Frame::from_normal(n);
+    let wi = frame.local_from_world(-p.direction);
+    // The classic survival probability: the largest channel of the albedo.
+    let r = brdf.albedo(wi).max_element().min(1.0) as f64;
+    if r <= 0.0 {
+        return;
+    }
+    let s = if ctx.n_max_refl > 0.0 {
+        let alpha_e = luminance(p.power) / ctx.max_light_luminance;
+        let alpha_d = match &ctx.tables[material] {
+            Some(t) => t.alpha_d(wi.z),
+            None => ctx.alpha_min,
+        };
+        alpha_e as f64 * alpha_d as f64 * ctx.n_max_refl
+    } else {
+        0.0
+    };
+    let (m, capped) = expected_children(s, r, ctx.split_cap);
+    out.capped += u64::from(capped);
+    let mut rng = Rng::new(hash2(p.key, 0x5E1E_C7ED));
+    let k = round_stochastic(m, rng.next_f32());
+    let scale = (1.0 / m) as f32;
+    for c in 0..k {
+        let key = hash2(p.key, c as u64 + 1);
+        let mut crng = Rng::new(key ^ 0xD1EC_7104);
+        let Some(bs) = brdf.sample(wi, crng.next_2d()) else {
+            continue;
+        };
+        let power = p.power * bs.weight * scale;
+        if !power.is_finite() || power.max_element() <= 0.0 {
+            continue;
+        }
+        out.children.push(PathState {
+            origin: position + n * ctx.epsilon,
+            direction: frame.world_from_local(bs.wo).normalize(),
+            power,
+            key,
+        });
+    }
+}
