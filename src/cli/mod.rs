@@ -1,7 +1,9 @@
 //! Subcommands, one file each.
 
 pub mod analyze;
+pub mod common;
 pub mod scene;
+pub mod trace;
 
 use clap::{Parser, Subcommand};
 
@@ -19,11 +21,14 @@ pub enum Command {
     Analyze(analyze::AnalyzeArgs),
     /// Print what a scene holds: triangles, meshes, materials, lights, bounds.
     Scene(scene::SceneArgs),
+    /// Trace photons in one mode and report counts, density statistics and timings.
+    Trace(trace::TraceArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Analyze(a) => analyze::run(a),
         Command::Scene(a) => scene::run(a),
+        Command::Trace(a) => trace::run(a),
     }
 }
