@@ -1,0 +1,536 @@
+//! Scenes: a [`SceneBuilder`] that takes triangle meshes and becomes, by
+//! value, an immutable [`CommittedScene`] that any number of threads can
+//! trace at once.
+//!
+//! Build settings (documented constants, chosen for a photon tracer that
+//! builds once and traces hundreds of millions of rays):
+//! - `RTC_BUILD_QUALITY_HIGH` for the scene and every geometry (SAH with
+//!   spatial splits: slower build, faster traversal);
+//! - `RTC_SCENE_FLAG_ROBUST`: watertight traversal, so photons do not leak
+//!   through shared edges of a closed room.
+//!
+//! Rays that are invalid for Embree (non-finite origin or direction, zero
+//! direction, `tnear < 0`, `tfar < tnear`, NaN) are never passed to it: they
+//! miss and are not occluded.
+
+use std::ptr::NonNull;
+use std::sync::Arc;
+
+use embree_sys as sys;
+use glam::Vec3;
+
+use super::device::{Device, DeviceInner};
+use super::{Hit, Ray};
+use crate::{Error, Result};
+
+// Vertex data is copied as packed `f32` triples into Embree's FLOAT3 buffers.
+const _: () = assert!(std::mem::size_of::<Vec3>() == 12 && std::mem::align_of::<Vec3>() == 4);
+
+/// Owns one reference to an Embree scene.
+struct SceneHandle(NonNull<sys::RTCSceneTy>);
+
+impl Drop for SceneHandle {
+    fn drop(&mut self) {
+        // SAFETY: we hold one reference to a live scene and give it back once.
+        unsafe { sys::rtcReleaseScene(self.0.as_ptr()) };
+    }
+}
+
+/// Owns one reference to an Embree geometry (released once attached: the
+/// scene keeps its own reference).
+struct GeometryHandle(NonNull<sys::RTCGeometryTy>);
+
+impl Drop for GeometryHandle {
+    fn drop(&mut self) {
+        // SAFETY: we hold one reference to a live geometry and give it back once.
+        unsafe { sys::rtcReleaseGeometry(self.0.as_ptr()) };
+    }
+}
+
+/// A scene under construction. Add meshes, then [`commit`](Self::commit).
+pub struct SceneBuilder<'d> {
+    device: &'d Device,
+    scene: SceneHandle,
+    /// Material of each geometry, indexed by Embree geometry ID.
+    materials: Vec<u32>,
+}
+
+impl std::fmt::Debug for SceneBuilder<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SceneBuilder")
+            .field("geometries", &self.materials.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Device {
+    /// Starts an empty scene on this device.
+    ///
+    /// # Errors
+    /// [`Error::Embree`] when Embree cannot create the scene.
+    pub fn scene_builder(&self) -> Result<SceneBuilder<'_>> {
+        SceneBuilder::new(self)
+    }
+}
+
+impl<'d> SceneBuilder<'d> {
+    /// Starts an empty scene on `device`.
+    ///
+    /// # Errors
+    /// [`Error::Embree`] when Embree cannot create the scene.
+    pub fn new(device: &'d Device) -> Result<Self> {
+        let inner = &device.inner;
+        let _guard = inner.lock();
+        // SAFETY: the device is live; the returned handle is checked for null.
+        let raw = unsafe { sys::rtcNewScene(inner.raw()) };
+        let scene = SceneHandle(NonNull::new(raw).ok_or_else(|| inner.null_error("rtcNewScene"))?);
+        // SAFETY: `scene` is a live scene no other thread can see yet.
+        unsafe {
+            sys::rtcSetSceneBuildQuality(scene.0.as_ptr(), sys::RTC_BUILD_QUALITY_HIGH);
+            sys::rtcSetSceneFlags(scene.0.as_ptr(), sys::RTC_SCENE_FLAG_ROBUST);
+        }
+        inner.check()?;
+        Ok(SceneBuilder {
+            device,
+            scene,
+            materials: Vec::new(),
+        })
+    }
+
+    /// Adds a triangle mesh whose hits report `material`, and returns its
+    /// Embree geometry ID (IDs count up from 0 in the order meshes are added).
+    /// The data is copied into buffers Embree owns.
+    ///
+    /// # Errors
+    /// [`Error::InvalidScene`] when the mesh is empty, an index is out of
+    /// range, or a position is not finite; [`Error::Embree`] when Embree
+    /// fails (out of memory, too many primitives).
+    pub fn add_triangles(
+        &mut self,
+        positions: &[Vec3],
+        indices: &[[u32; 3]],
+        material: u32,
+    ) -> Result<u32> {
+        if indices.is_empty() {
+            return Err(Error::InvalidScene("a mesh has no triangles".into()));
+        }
+        let n_vertices = u32::try_from(positions.len()).map_err(|_| {
+            Error::InvalidScene(format!(
+                "a mesh has {} vertices, more than u32 indices can address",
+                positions.len()
+            ))
+        })?;
+        u32::try_from(indices.len()).map_err(|_| {
+            Error::InvalidScene(format!(
+                "a mesh has {} triangles, more than Embree accepts",
+                indices.len()
+            ))
+        })?;
+        if let Some((i, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+            return Err(Error::InvalidScene(format!(
+                "vertex {i} is not finite: {p}"
+            )));
+        }
+        if let Some((t, tri)) = indices
+            .iter()
+            .enumerate()
+            .find(|(_, tri)| tri.iter().any(|&i| i >= n_vertices))
+        {
+            return Err(Error::InvalidScene(format!(
+                "triangle {t} has indices {tri:?} but the mesh has {n_vertices} vertices"
+            )));
+        }
+
+        let inner: &DeviceInner = &self.device.inner;
+        let _guard = inner.lock();
+        // SAFETY: the device is live; the handle is checked for null.
+        let raw = unsafe { sys::rtcNewGeometry(inner.raw(), sys::RTC_GEOMETRY_TYPE_TRIANGLE) };
+        let geometry =
+            GeometryHandle(NonNull::new(raw).ok_or_else(|| inner.null_error("rtcNewGeometry"))?);
+        let g = geometry.0.as_ptr();
+        // SAFETY: `g` is a live geometry only this thread sees. Embree allocates
+        // each buffer for exactly `count` items of `stride` bytes (plus its own
+        // padding) and returns null on failure, checked before the copy; the
+        // copies write `count * stride` bytes, matching the source slices
+        // (`Vec3` and `[u32; 3]` are 12 bytes, checked above).
+        unsafe {
+            let vertices = sys::rtcSetNewGeometryBuffer(
+                g,
+                sys::RTC_BUFFER_TYPE_VERTEX,
+                0,
+                sys::RTC_FORMAT_FLOAT3,
+                12,
+                positions.len(),
+            );
+            if vertices.is_null() {
+                return Err(inner.null_error("rtcSetNewGeometryBuffer(vertex)"));
+            }
+            std::ptr::copy_nonoverlapping(
+                positions.as_ptr().cast::<u8>(),
+                vertices.cast::<u8>(),
+                12 * positions.len(),
+            );
+            let triangles = sys::rtcSetNewGeometryBuffer(
+                g,
+                sys::RTC_BUFFER_TYPE_INDEX,
+                0,
+                sys::RTC_FORMAT_UINT3,
+                12,
+                indices.len(),
+            );
+            if triangles.is_null() {
+                return Err(inner.null_error("rtcSetNewGeometryBuffer(index)"));
+            }
+            std::ptr::copy_nonoverlapping(
+                indices.as_ptr().cast::<u8>(),
+                triangles.cast::<u8>(),
+                12 * indices.len(),
+            );
+            sys::rtcSetGeometryBuildQuality(g, sys::RTC_BUILD_QUALITY_HIGH);
+            sys::rtcCommitGeometry(g);
+        }
+        inner.check()?;
+        // SAFETY: scene and geometry are live and only this thread sees them.
+        let geom_id = unsafe { sys::rtcAttachGeometry(self.scene.0.as_ptr(), g) };
+        inner.check()?;
+        if geom_id == sys::RTC_INVALID_GEOMETRY_ID {
+            return Err(inner.null_error("rtcAttachGeometry"));
+        }
+        let slot = geom_id as usize;
+        if self.materials.len() <= slot {
+            self.materials.resize(slot + 1, u32::MAX);
+        }
+        self.materials[slot] = material;
+        Ok(geom_id)
+    }
+
+    /// Builds the acceleration structure and freezes the scene.
+    ///
+    /// # Errors
+    /// [`Error::Embree`] with the first error Embree reported while building.
+    pub fn commit(self) -> Result<CommittedScene> {
+        let SceneBuilder {
+            device,
+            scene,
+            materials,
+        } = self;
+        let inner = Arc::clone(&device.inner);
+        let bounds = {
+            let _guard = inner.lock();
+            let mut b = sys::RTCBounds::default();
+            // SAFETY: the scene is live and no other thread sees it; `b` is a
+            // properly aligned `RTCBounds` for Embree to fill.
+            unsafe {
+                sys::rtcCommitScene(scene.0.as_ptr());
+                sys::rtcGetSceneBounds(scene.0.as_ptr(), &mut b);
+            }
+            inner.check()?;
+            (
+                Vec3::new(b.lower_x, b.lower_y, b.lower_z),
+                Vec3::new(b.upper_x, b.upper_y, b.upper_z),
+            )
+        };
+        Ok(CommittedScene {
+            scene,
+            materials,
+            bounds,
+            device: inner,
+        })
+    }
+}
+
+/// How a batch of rays is handed to Embree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BatchKernel {
+    /// One `rtcIntersect1` / `rtcOccluded1` call per ray.
+    Single,
+    /// 16-ray packets (`rtcIntersect16` / `rtcOccluded16`).
+    Packet16,
+}
+
+/// The kernel [`CommittedScene::intersect_batch`] uses: the faster one in
+/// `benches/rays.rs` (see the module docs of [`super`]).
+pub const DEFAULT_BATCH_KERNEL: BatchKernel = BatchKernel::Single;
+
+/// A built, immutable scene. Ray queries take `&self` and may run on any
+/// number of threads at once.
+pub struct CommittedScene {
+    // Field order matters: the scene is released before the device reference.
+    scene: SceneHandle,
+    materials: Vec<u32>,
+    bounds: (Vec3, Vec3),
+    device: Arc<DeviceInner>,
+}
+
+// SAFETY: a committed scene is never modified again (no `&mut` methods touch
+// Embree); Embree allows `rtcIntersect*` / `rtcOccluded*` on a committed
+// scene from any threads concurrently, and its reference counts (released in
+// `Drop`, on whatever thread) are atomic.
+unsafe impl Send for CommittedScene {}
+// SAFETY: see `Send`: shared access only runs the concurrent-safe queries.
+unsafe impl Sync for CommittedScene {}
+
+impl std::fmt::Debug for CommittedScene {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CommittedScene")
+            .field("geometries", &self.materials.len())
+            .field("bounds", &self.bounds)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Whether Embree may be given this ray (see the module docs).
+#[inline]
+fn is_valid(ray: &Ray) -> bool {
+    ray.origin.is_finite()
+        && ray.dir.is_finite()
+        && ray.dir != Vec3::ZERO
+        && ray.tnear >= 0.0
+        && ray.tnear <= ray.tfar
+}
+
+#[inline]
+fn to_rtc_ray(ray: &Ray) -> sys::RTCRay {
+    sys::RTCRay {
+        org_x: ray.origin.x,
+        org_y: ray.origin.y,
+        org_z: ray.origin.z,
+        tnear: ray.tnear,
+        dir_x: ray.dir.x,
+        dir_y: ray.dir.y,
+        dir_z: ray.dir.z,
+        time: 0.0,
+        tfar: ray.tfar,
+        mask: u32::MAX,
+        id: 0,
+        flags: 0,
+    }
+}
+
+/// An `RTCRayHit` ready for `rtcIntersect1`.
+#[inline]
+pub(crate) fn to_rtc_rayhit(ray: &Ray) -> sys::RTCRayHit {
+    let mut hit = sys::RTCHit {
+        geomID: sys::RTC_INVALID_GEOMETRY_ID,
+        primID: sys::RTC_INVALID_GEOMETRY_ID,
+        ..Default::default()
+    };
+    hit.instID.fill(sys::RTC_INVALID_GEOMETRY_ID);
+    sys::RTCRayHit {
+        ray: to_rtc_ray(ray),
+        hit,
+    }
+}
+
+/// Number of rays in an Embree packet.
+const PACKET: usize = 16;
+
+/// Embree's 16-lane validity mask (`-1` active, `0` inactive), 64-byte aligned
+/// as `rtcIntersect16` requires.
+#[repr(C, align(64))]
+struct ValidMask([i32; PACKET]);
+
+/// Fills the ray part of a packet; lanes past `rays.len()` or holding an
+/// invalid ray are masked off.
+#[inline]
+fn fill_packet(rays: &[Ray], p: &mut sys::RTCRay16, valid: &mut ValidMask) {
+    for lane in 0..PACKET {
+        let r = rays.get(lane);
+        valid.0[lane] = if r.is_some_and(is_valid) { -1 } else { 0 };
+        let r = match r {
+            Some(r) => *r,
+            None => Ray::new(Vec3::ZERO, Vec3::Z),
+        };
+        p.org_x[lane] = r.origin.x;
+        p.org_y[lane] = r.origin.y;
+        p.org_z[lane] = r.origin.z;
+        p.tnear[lane] = r.tnear;
+        p.dir_x[lane] = r.dir.x;
+        p.dir_y[lane] = r.dir.y;
+        p.dir_z[lane] = r.dir.z;
+        p.time[lane] = 0.0;
+        p.tfar[lane] = r.tfar;
+        p.mask[lane] = u32::MAX;
+        p.id[lane] = 0;
+        p.flags[lane] = 0;
+    }
+}
+
+impl CommittedScene {
+    /// The raw scene handle, valid while `self` lives. Only Embree's ray
+    /// queries may be called on it (the scene is shared across threads).
+    pub fn raw(&self) -> sys::RTCScene {
+        self.scene.0.as_ptr()
+    }
+
+    /// Number of geometry IDs in use (meshes added).
+    pub fn geometry_count(&self) -> usize {
+        self.materials.len()
+    }
+
+    /// The material passed to [`SceneBuilder::add_triangles`] for `geom_id`.
+    pub fn material(&self, geom_id: u32) -> Option<u32> {
+        self.materials.get(geom_id as usize).copied()
+    }
+
+    /// Axis-aligned bounds `(lower, upper)` of everything in the scene
+    /// (`(+inf, -inf)` componentwise when the scene is empty).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.bounds
+    }
+
+    /// The Embree device the scene lives on is kept alive by the scene;
+    /// this reports (and clears) its first unchecked error.
+    ///
+    /// # Errors
+    /// That error, as [`Error::Embree`].
+    pub fn check(&self) -> Result<()> {
+        self.device.check()
+    }
+
+    /// Converts Embree's answer for one ray.
+    #[inline]
+    fn hit_from(&self, ray: &sys::RTCRay, hit: &sys::RTCHit) -> Option<Hit> {
+        if hit.geomID == sys::RTC_INVALID_GEOMETRY_ID {
+            return None;
+        }
+        Some(Hit {
+            t: ray.tfar,
+            ng: Vec3::new(hit.Ng_x, hit.Ng_y, hit.Ng_z).normalize_or_zero(),
+            geom_id: hit.geomID,
+            prim_id: hit.primID,
+            u: hit.u,
+            v: hit.v,
+            material: self.material(hit.geomID).unwrap_or(u32::MAX),
+        })
+    }
+
+    /// The closest hit along `ray` in `[tnear, tfar]`, if any.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !is_valid(ray) {
+            return None;
+        }
+        let mut rh = to_rtc_rayhit(ray);
+        // SAFETY: the scene is committed and alive for `&self`; `rh` is an
+        // initialised `RTCRayHit` with the header's layout, exclusively ours.
+        unsafe { sys::apm_intersect1(self.raw(), &mut rh) };
+        self.hit_from(&rh.ray, &rh.hit)
+    }
+
+    /// Whether anything lies along `ray` in `[tnear, tfar]`.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if !is_valid(ray) {
+            return false;
+        }
+        let mut r = to_rtc_ray(ray);
+        // SAFETY: as in `intersect`, with an initialised `RTCRay`.
+        unsafe { sys::apm_occluded1(self.raw(), &mut r) };
+        r.tfar == f32::NEG_INFINITY
+    }
+
+    /// [`intersect`](Self::intersect) for every ray, with
+    /// [`DEFAULT_BATCH_KERNEL`]. Results are identical to `intersect`'s.
+    ///
+    /// # Panics
+    /// If `rays` and `hits` differ in length.
+    pub fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        self.intersect_batch_with(DEFAULT_BATCH_KERNEL, rays, hits);
+    }
+
+    /// [`occluded`](Self::occluded) for every ray, with [`DEFAULT_BATCH_KERNEL`].
+    ///
+    /// # Panics
+    /// If `rays` and `out` differ in length.
+    pub fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        self.occluded_batch_with(DEFAULT_BATCH_KERNEL, rays, out);
+    }
+
+    /// [`intersect_batch`](Self::intersect_batch) with a chosen kernel.
+    ///
+    /// # Panics
+    /// If `rays` and `hits` differ in length.
+    pub fn intersect_batch_with(
+        &self,
+        kernel: BatchKernel,
+        rays: &[Ray],
+        hits: &mut [Option<Hit>],
+    ) {
+        assert_eq!(
+            rays.len(),
+            hits.len(),
+            "intersect_batch: one hit slot per ray"
+        );
+        match kernel {
+            BatchKernel::Single => {
+                for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
+                    *hit = self.intersect(ray);
+                }
+            }
+            BatchKernel::Packet16 => {
+                let mut packet = sys::RTCRayHit16::default();
+                let mut valid = ValidMask([0; PACKET]);
+                for (rays, hits) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
+                    fill_packet(rays, &mut packet.ray, &mut valid);
+                    packet.hit.geomID = [sys::RTC_INVALID_GEOMETRY_ID; PACKET];
+                    // SAFETY: the scene is committed and alive; `valid` and
+                    // `packet` are initialised, 64-byte aligned (checked by
+                    // their types' `align` attributes) and exclusively ours.
+                    unsafe { sys::apm_intersect16(valid.0.as_ptr(), self.raw(), &mut packet) };
+                    for (lane, hit) in hits.iter_mut().enumerate() {
+                        *hit = if valid.0[lane] == 0 {
+                            None
+                        } else {
+                            self.packet_hit(&packet, lane)
+                        };
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`occluded_batch`](Self::occluded_batch) with a chosen kernel.
+    ///
+    /// # Panics
+    /// If `rays` and `out` differ in length.
+    pub fn occluded_batch_with(&self, kernel: BatchKernel, rays: &[Ray], out: &mut [bool]) {
+        assert_eq!(rays.len(), out.len(), "occluded_batch: one slot per ray");
+        match kernel {
+            BatchKernel::Single => {
+                for (ray, o) in rays.iter().zip(out.iter_mut()) {
+                    *o = self.occluded(ray);
+                }
+            }
+            BatchKernel::Packet16 => {
+                let mut packet = sys::RTCRay16::default();
+                let mut valid = ValidMask([0; PACKET]);
+                for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+                    fill_packet(rays, &mut packet, &mut valid);
+                    // SAFETY: as in `intersect_batch_with`, with an `RTCRay16`.
+                    unsafe { sys::apm_occluded16(valid.0.as_ptr(), self.raw(), &mut packet) };
+                    for (lane, o) in out.iter_mut().enumerate() {
+                        *o = valid.0[lane] != 0 && packet.tfar[lane] == f32::NEG_INFINITY;
+                    }
+                }
+            }
+        }
+    }
+
+    #[inline]
+    fn packet_hit(&self, p: &sys::RTCRayHit16, lane: usize) -> Option<Hit> {
+        let geom_id = p.hit.geomID[lane];
+        if geom_id == sys::RTC_INVALID_GEOMETRY_ID {
+            return None;
+        }
+        Some(Hit {
+            t: p.ray.tfar[lane],
+            ng: Vec3::new(p.hit.Ng_x[lane], p.hit.Ng_y[lane], p.hit.Ng_z[lane]).normalize_or_zero(),
+            geom_id,
+            prim_id: p.hit.primID[lane],
+            u: p.hit.u[lane],
+            v: p.hit.v[lane],
+            material: self.material(geom_id).unwrap_or(u32::MAX),
+        })
+    }
+}
