@@ -1,1 +1,272 @@
-//! (in progress)
+//! Directionality analysis of emission profiles and BRDFs (paper §2.1,
+//! SPEC §2.3): `alpha_D` in [`alpha_min`, 1], 1 for a diffuse function,
+//! towards 0 for a single sharp direction.
+//!
+//! The analysed function is the emitter's radiance `cos^n` or a BRDF's
+//! `f_r(wi, .)` (luminance of RGB; `f`, not `f cos`), normalised to unit
+//! integral over the hemisphere. Two estimators:
+//! - [`Estimator::Paper`] (default): [`sampling`] (importance samples +
+//!   equal-solid-angle strata) → variance of the strata against
+//!   `variance_threshold` (below: `alpha_D = 1`) → [`cluster`] (greedy
+//!   complete linkage above the diffuse level, O(m^2)) → peaks holding at
+//!   least `min_peak_fraction` of the samples → `alpha_D = sum omega_i / 2 pi`
+//!   from [`solid_angle`];
+//! - [`Estimator::PeakDensity`]: `alpha_D = 1 / (pi max p)` with `p` the
+//!   normalised density of the re-emitted direction (`f cos / integral f cos`):
+//!   closed form `2 / (n + 2)` for `cos^n`; for a BRDF the maximum is taken
+//!   over the importance samples, the strata centres, the normal and the
+//!   mirror direction, and the normalisation is the BRDF's albedo.
+//!
+//! Both are clamped to [`alpha_min`, 1]. Documented special cases: a delta
+//! BRDF (mirror) gets `alpha_min` without sampling; an all-zero function
+//! (albedo 0, or an incident direction at or below the horizon) is reported
+//! diffuse, `alpha_D = 1` with no peaks, the limit of a vanishing diffuse
+//! albedo (its photon count is 0 anyway through `alpha_E`).
+//!
+//! Analyses run once per distinct function ([`AnalysisCache`]); BRDFs are
+//! tabulated over theta_in ([`DirectionalityTable`]).
+//!
+//! [`alpha_min`]: AnalysisParams::alpha_min
+
+pub mod cache;
+pub mod cluster;
+pub mod params;
+pub mod sampling;
+pub mod solid_angle;
+pub mod table;
+
+pub use cache::AnalysisCache;
+pub use params::AnalysisParams;
+pub use table::DirectionalityTable;
+
+use crate::brdf::Brdf;
+use crate::emitter::CosN;
+use crate::error::{Error, Result};
+use crate::sampling::luminance;
+use glam::Vec3;
+use sampling::{SampleSet, Target};
+use std::time::{Duration, Instant};
+
+/// Which `alpha_D` estimator to use.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Estimator {
+    /// The paper's: variance test, clustering, peak solid angles.
+    #[default]
+    Paper,
+    /// `1 / (pi max p)`: keeps the peak photon density of a function equal
+    /// to a diffuse one's by construction.
+    PeakDensity,
+}
+
+impl std::str::FromStr for Estimator {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "paper" => Ok(Estimator::Paper),
+            "peak" | "peak-density" => Ok(Estimator::PeakDensity),
+            _ => Err(Error::param(
+                "directionality",
+                format!("expected `paper` or `peak`, got `{s}`"),
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for Estimator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Estimator::Paper => "paper",
+            Estimator::PeakDensity => "peak",
+        })
+    }
+}
+
+/// One peak found by the clustering.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Peak {
+    /// Importance samples in the peak.
+    pub samples: usize,
+    /// Solid angle of its box of extreme spherical coordinates (sr).
+    pub solid_angle: f32,
+    /// Mean normalised value of its samples (sr^-1).
+    pub mean_value: f32,
+    /// Normalised mean direction of its samples (local frame).
+    pub direction: Vec3,
+}
+
+/// The result of one analysis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Directionality {
+    /// `alpha_D` in [`alpha_min`, 1](AnalysisParams::alpha_min).
+    pub alpha_d: f32,
+    /// Peaks kept (empty when the function is diffuse, or for the
+    /// peak-density estimator).
+    pub peaks: Vec<Peak>,
+    /// Variance of the normalised function over the strata (sr^-2).
+    pub variance: f32,
+    /// Time of step 1 (sampling and strata).
+    pub sample_time: Duration,
+    /// Time of steps 3-4 (clustering and solid angles).
+    pub cluster_time: Duration,
+}
+
+impl Directionality {
+    fn diffuse(variance: f32, sample_time: Duration) -> Self {
+        Directionality {
+            alpha_d: 1.0,
+            peaks: Vec::new(),
+            variance,
+            sample_time,
+            cluster_time: Duration::ZERO,
+        }
+    }
+}
+
+/// Clusters a sample set and turns the kept groups into peaks (steps 3-4).
+/// Public so that synthetic sample sets can be analysed directly.
+pub fn find_peaks(dirs: &[Vec3], values: &[f32], drawn: usize, p: &AnalysisParams) -> Vec<Peak> {
+    let n = values.len().max(1) as f64;
+    let mean = values.iter().map(|&v| v as f64).sum::<f64>() / n;
+    let global = values
+        .iter()
+        .map(|&v| (v as f64 - mean).powi(2))
+        .sum::<f64>()
+        / n;
+    let groups = cluster::cluster(dirs, values, p.peak_variance_fraction as f64 * global);
+    let min_samples = p.min_peak_fraction as f64 * drawn.max(values.len()) as f64;
+    groups
+        .into_iter()
+        .filter(|g| g.len() as f64 >= min_samples)
+        .map(|g| {
+            let d: Vec<Vec3> = g.iter().map(|&i| dirs[i as usize]).collect();
+            let mean_value =
+                g.iter().map(|&i| values[i as usize] as f64).sum::<f64>() / g.len() as f64;
+            Peak {
+                samples: g.len(),
+                solid_angle: solid_angle::solid_angle(&d),
+                mean_value: mean_value as f32,
+                direction: d.iter().copied().sum::<Vec3>().normalize_or_zero(),
+            }
+        })
+        .collect()
+}
+
+fn paper(set: &SampleSet, sample_time: Duration, p: &AnalysisParams) -> Directionality {
+    if set.integral <= 0.0 || set.variance < p.variance_threshold {
+        return Directionality::diffuse(set.variance, sample_time);
+    }
+    let t = Instant::now();
+    let peaks = find_peaks(&set.dirs, &set.values, set.drawn, p);
+    let omega: f32 = peaks.iter().map(|pk| pk.solid_angle).sum();
+    let alpha_d = (omega / (2.0 * std::f32::consts::PI)).clamp(p.alpha_min, 1.0);
+    Directionality {
+        alpha_d,
+        peaks,
+        variance: set.variance,
+        sample_time,
+        cluster_time: t.elapsed(),
+    }
+}
+
+/// `alpha_D = 1 / (pi max p)` clamped to [`alpha_min`, 1].
+fn peak_alpha(max_p: f64, p: &AnalysisParams) -> f32 {
+    if !(max_p > 0.0) {
+        return 1.0;
+    }
+    ((1.0 / (std::f64::consts::PI * max_p)) as f32).clamp(p.alpha_min, 1.0)
+}
+
+/// Directionality of a `cos^n` emitter.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] when `p` does not validate.
+pub fn analyze_emitter(e: &CosN, est: Estimator, p: &AnalysisParams) -> Result<Directionality> {
+    p.validate()?;
+    let n = e.exponent();
+    match est {
+        Estimator::PeakDensity => {
+            // p = (n + 2) / (2 pi) cos^(n+1): max at the normal, closed form.
+            let max_p = (n as f64 + 2.0) / (2.0 * std::f64::consts::PI);
+            let mut d = Directionality::diffuse(variance_cosn(n), Duration::ZERO);
+            d.alpha_d = peak_alpha(max_p, p);
+            Ok(d)
+        }
+        Estimator::Paper => {
+            let t = Instant::now();
+            let set = sampling::sample(Target::CosN(n), p);
+            Ok(paper(&set, t.elapsed(), p))
+        }
+    }
+}
+
+/// Variance of normalised `cos^n` over the hemisphere,
+/// `n^2 / (4 pi^2 (2n + 1))` (SPEC §2.3).
+pub fn variance_cosn(n: f32) -> f32 {
+    let n = n as f64;
+    (n * n / (4.0 * std::f64::consts::PI.powi(2) * (2.0 * n + 1.0))) as f32
+}
+
+/// Directionality of a BRDF for one incident direction of cosine
+/// `cos_theta_in` (isotropic: azimuth 0).
+///
+/// # Errors
+/// [`Error::InvalidParameter`] when `cos_theta_in` is NaN or outside [0, 1],
+/// or `p` does not validate.
+pub fn analyze_brdf_at(
+    b: &Brdf,
+    cos_theta_in: f32,
+    est: Estimator,
+    p: &AnalysisParams,
+) -> Result<Directionality> {
+    p.validate()?;
+    if !(0.0..=1.0).contains(&cos_theta_in) {
+        return Err(Error::param(
+            "cos_theta_in",
+            format!("must be in [0, 1], got {cos_theta_in}"),
+        ));
+    }
+    if b.is_delta() {
+        let mut d = Directionality::diffuse(f32::INFINITY, Duration::ZERO);
+        d.alpha_d = p.alpha_min;
+        return Ok(d);
+    }
+    let sin = (1.0 - cos_theta_in * cos_theta_in).max(0.0).sqrt();
+    let wi = Vec3::new(sin, 0.0, cos_theta_in);
+    let t = Instant::now();
+    let set = sampling::sample(Target::Brdf(b, wi), p);
+    let sample_time = t.elapsed();
+    Ok(match est {
+        Estimator::Paper => paper(&set, sample_time, p),
+        Estimator::PeakDensity => {
+            let albedo = luminance(b.albedo(wi)) as f64;
+            let max_p = if albedo > 0.0 {
+                set.max_projected as f64 / albedo
+            } else {
+                0.0
+            };
+            let mut d = Directionality::diffuse(set.variance, sample_time);
+            d.alpha_d = peak_alpha(max_p, p);
+            d
+        }
+    })
+}
+
+/// Tabulates a BRDF's `alpha_D` over `p.theta_in_bins` incident angles.
+/// A delta BRDF gets the floor everywhere without sampling.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] when `p` does not validate.
+pub fn analyze_brdf(b: &Brdf, est: Estimator, p: &AnalysisParams) -> Result<DirectionalityTable> {
+    p.validate()?;
+    let bins = p.theta_in_bins;
+    let (mut ts, mut tc) = (Duration::ZERO, Duration::ZERO);
+    let mut alphas = Vec::with_capacity(bins);
+    for k in 0..bins {
+        let c = DirectionalityTable::node_theta(k, bins).cos();
+        let d = analyze_brdf_at(b, c, est, p)?;
+        ts += d.sample_time;
+        tc += d.cluster_time;
+        alphas.push(d.alpha_d);
+    }
+    Ok(DirectionalityTable::from_values(&alphas, p.alpha_min, ts, tc))
+}

@@ -15,6 +15,16 @@ pub struct Lambert {
 }
 
 impl Lambert {
+    /// A diffuse BRDF of the given albedo.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidParameter`] when a channel is NaN or outside [0, 1].
+    pub fn new(albedo: Vec3) -> crate::Result<Self> {
+        Ok(Lambert {
+            albedo: super::phong::check_rgb01("lambert albedo", albedo)?,
+        })
+    }
+
     /// Evaluates the BRDF.
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
         if wi.z <= 0.0 || wo.z <= 0.0 {

@@ -1,14 +1,26 @@
 //! Reflection models: a closed set, dispatched by `match` (no trait objects, so
-//! work queues hold plain `Copy` values). One file per model.
+//! work queues hold plain `Copy` values). One file per model:
+//! [`Lambert`], [`Phong`] (modified Phong), [`CookTorrance`] (Beckmann,
+//! Schlick, V-cavity), [`Mirror`] (delta); [`from_gltf_pbr`] maps glTF
+//! metallic-roughness materials onto them.
 //!
 //! All directions are in the local shading frame (normal = +z) and point away
 //! from the surface: `wi` towards where the light came from, `wo` towards where
 //! it leaves.
 
+pub mod cook_torrance;
+pub mod gltf_map;
 pub mod lambert;
+pub mod mirror;
+pub mod phong;
 
+pub use cook_torrance::CookTorrance;
+pub use gltf_map::from_gltf_pbr;
 pub use lambert::Lambert;
+pub use mirror::Mirror;
+pub use phong::Phong;
 
+use crate::rng::hash2;
 use glam::Vec3;
 
 /// A BRDF sample: the outgoing direction and its Monte Carlo weight.
@@ -29,41 +41,104 @@ pub struct BrdfSample {
 pub enum Brdf {
     /// Ideal diffuse.
     Lambert(Lambert),
+    /// Modified Phong (diffuse + normalised power-cosine lobe).
+    Phong(Phong),
+    /// Cook–Torrance microfacet model with an optional diffuse base.
+    CookTorrance(CookTorrance),
+    /// Perfect mirror (delta).
+    Mirror(Mirror),
+}
+
+macro_rules! dispatch {
+    ($self:ident, $b:ident => $e:expr) => {
+        match $self {
+            Brdf::Lambert($b) => $e,
+            Brdf::Phong($b) => $e,
+            Brdf::CookTorrance($b) => $e,
+            Brdf::Mirror($b) => $e,
+        }
+    };
 }
 
 impl Brdf {
     /// `f_r(wi, wo)` per RGB channel (sr^-1); 0 below the horizon.
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
-        match self {
-            Brdf::Lambert(b) => b.eval(wi, wo),
-        }
+        dispatch!(self, b => b.eval(wi, wo))
     }
 
     /// Importance-samples `wo` for a given `wi`.
     pub fn sample(&self, wi: Vec3, u: [f32; 2]) -> Option<BrdfSample> {
-        match self {
-            Brdf::Lambert(b) => b.sample(wi, u),
-        }
+        dispatch!(self, b => b.sample(wi, u))
     }
 
     /// Solid-angle pdf of [`Brdf::sample`].
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        match self {
-            Brdf::Lambert(b) => b.pdf(wi, wo),
-        }
+        dispatch!(self, b => b.pdf(wi, wo))
     }
 
     /// Directional albedo `integral f_r(wi, wo) cos(theta_o) dwo` per channel.
     pub fn albedo(&self, wi: Vec3) -> Vec3 {
-        match self {
-            Brdf::Lambert(b) => b.albedo(wi),
-        }
+        dispatch!(self, b => b.albedo(wi))
     }
 
     /// True when the whole model is a delta distribution (no photon is stored on it).
     pub fn is_delta(&self) -> bool {
+        matches!(self, Brdf::Mirror(_))
+    }
+
+    /// A short name of the model (`lambert`, `phong`, `cook-torrance`, `mirror`).
+    pub fn kind(&self) -> &'static str {
         match self {
-            Brdf::Lambert(_) => false,
+            Brdf::Lambert(_) => "lambert",
+            Brdf::Phong(_) => "phong",
+            Brdf::CookTorrance(_) => "cook-torrance",
+            Brdf::Mirror(_) => "mirror",
         }
+    }
+
+    /// A 64-bit key of the model and the exact bits of its parameters: equal
+    /// models have equal keys, and distinct ones collide with probability
+    /// ~2^-64. The analysis cache is keyed by it.
+    pub fn key(&self) -> u64 {
+        let (tag, params): (u64, [f32; 7]) = match self {
+            Brdf::Lambert(b) => (1, [b.albedo.x, b.albedo.y, b.albedo.z, 0.0, 0.0, 0.0, 0.0]),
+            Brdf::Phong(b) => {
+                let (d, s) = (b.kd(), b.ks());
+                (2, [d.x, d.y, d.z, s.x, s.y, s.z, b.exponent()])
+            }
+            Brdf::CookTorrance(b) => {
+                let (d, f) = (b.kd(), b.f0());
+                (3, [d.x, d.y, d.z, f.x, f.y, f.z, b.roughness()])
+            }
+            Brdf::Mirror(b) => {
+                let r = b.reflectance();
+                (4, [r.x, r.y, r.z, 0.0, 0.0, 0.0, 0.0])
+            }
+        };
+        // +0.0 folds -0.0 into 0.0 so equal values give equal keys.
+        params
+            .iter()
+            .fold(tag, |k, v| hash2(k, (v + 0.0).to_bits() as u64))
+    }
+}
+
+impl From<Lambert> for Brdf {
+    fn from(b: Lambert) -> Self {
+        Brdf::Lambert(b)
+    }
+}
+impl From<Phong> for Brdf {
+    fn from(b: Phong) -> Self {
+        Brdf::Phong(b)
+    }
+}
+impl From<CookTorrance> for Brdf {
+    fn from(b: CookTorrance) -> Self {
+        Brdf::CookTorrance(b)
+    }
+}
+impl From<Mirror> for Brdf {
+    fn from(b: Mirror) -> Self {
+        Brdf::Mirror(b)
     }
 }
