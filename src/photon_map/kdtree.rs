@@ -1,0 +1,268 @@
+//! Building the photon map: a balanced kd-tree in one flat array of compact photons.
+//!
+//! It is Jensen's tree (every node a photon, split at the median along the largest
+//! side of its photons' bounding box) stored in **in-order** rather than heap order:
+//! the subtree of `n` photons starting at `lo` has its node at `lo + n / 2`, its left
+//! subtree in `[lo, lo + n/2)` and its right subtree after the node. Why:
+//! - a median split never leaves a hole, so no left-balancing and no permutation
+//!   pass to heap order is needed: the build partitions the array in place, and its
+//!   peak memory is the photon array itself (Jensen needs a second array);
+//! - every subtree is contiguous, so once a subtree holds at most [`LEAF_SIZE`]
+//!   photons a query scans it linearly (what kiddo's leaf buckets buy) and the build
+//!   stops partitioning there. The tree's depth is `ceil(log2(n / LEAF_SIZE))`.
+//!
+//! Determinism: the order used to partition is total over the 16 bytes of a photon
+//! and every leaf is sorted by it, so the array depends only on the *multiset* of
+//! encoded photons: not on the input order, on the thread count, or on how
+//! `select_nth_unstable_by` arranges equal elements.
+//!
+//! Parameters: [`LEAF_SIZE`] (query speed; measured in `benches/kdtree.rs`),
+//! `PARALLEL_MIN` (subtrees smaller than this are built on one thread).
+
+use super::photon::{CompactPhoton, Quantizer};
+use super::PhotonRecord;
+use crate::rng::{hash2, mix64};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Subtrees of at most this many photons are leaves, scanned linearly by queries.
+pub const LEAF_SIZE: usize = 12;
+
+/// Subtrees smaller than this are built sequentially (below it, rayon's task
+/// overhead outweighs the partitioning).
+const PARALLEL_MIN: usize = 1 << 14;
+
+/// A photon map: compact photons in a balanced kd-tree (see the module docs), with
+/// the quantisation frame that decodes them.
+#[derive(Clone, Debug)]
+pub struct PhotonMap {
+    pub(crate) photons: Vec<CompactPhoton>,
+    pub(crate) quant: Quantizer,
+    skipped: usize,
+}
+
+impl PhotonMap {
+    /// Builds the map from all valid records. The bounds are those of the valid
+    /// positions. A record is skipped (and counted, see [`PhotonMap::skipped`]) when
+    /// its position, power or direction is not finite or its direction is zero.
+    /// Negative power channels are stored as 0. O(n log n), parallel with rayon and
+    /// deterministic (see the module docs).
+    ///
+    /// # Panics
+    /// If more than `u32::MAX` records are valid (indices are `u32`; the records
+    /// alone would take 170 GB).
+    pub fn build(records: &[PhotonRecord]) -> PhotonMap {
+        Self::build_filtered(records, |_| true)
+    }
+
+    /// Like [`PhotonMap::build`] with only the records that `keep` accepts, for
+    /// instance `|r| r.depth == 0` for a map of primary photons. Records that `keep`
+    /// rejects are not counted as skipped.
+    ///
+    /// # Panics
+    /// As [`PhotonMap::build`].
+    pub fn build_filtered<F>(records: &[PhotonRecord], keep: F) -> PhotonMap
+    where
+        F: Fn(&PhotonRecord) -> bool + Sync,
+    {
+        let skipped = records.par_iter().filter(|r| !is_valid(r)).count();
+        let wanted = |r: &PhotonRecord| is_valid(r) && keep(r);
+        // min / max are exact, so this reduction is deterministic in any order.
+        let (min, max, max_power) = records
+            .par_iter()
+            .filter(|r| wanted(r))
+            .fold(
+                || (Vec3::INFINITY, Vec3::NEG_INFINITY, 0.0f32),
+                |(lo, hi, pw), r| {
+                    (
+                        lo.min(r.position),
+                        hi.max(r.position),
+                        pw.max(r.power.max_element()),
+                    )
+                },
+            )
+            .reduce(
+                || (Vec3::INFINITY, Vec3::NEG_INFINITY, 0.0f32),
+                |a, b| (a.0.min(b.0), a.1.max(b.1), a.2.max(b.2)),
+            );
+        let quant = Quantizer::new(min, max, max_power);
+        // An indexed collect writes straight into one Vec of records.len(); the
+        // marker + retain keeps the peak at one photon array.
+        let mut photons: Vec<CompactPhoton> = records
+            .par_iter()
+            .map(|r| {
+                if wanted(r) {
+                    quant.encode(r)
+                } else {
+                    CompactPhoton::INVALID
+                }
+            })
+            .collect();
+        photons.retain(|p| *p != CompactPhoton::INVALID);
+        assert!(
+            photons.len() <= u32::MAX as usize,
+            "a photon map holds at most u32::MAX photons"
+        );
+        build_subtree(&mut photons);
+        PhotonMap {
+            photons,
+            quant,
+            skipped,
+        }
+    }
+
+    /// Number of photons.
+    pub fn len(&self) -> usize {
+        self.photons.len()
+    }
+
+    /// True when the map holds no photon.
+    pub fn is_empty(&self) -> bool {
+        self.photons.is_empty()
+    }
+
+    /// Records that [`PhotonMap::build`] skipped because they were not finite.
+    pub fn skipped(&self) -> usize {
+        self.skipped
+    }
+
+    /// The photon at `index` (tree order), decoded.
+    ///
+    /// # Panics
+    /// If `index >= self.len()`.
+    pub fn photon(&self, index: u32) -> PhotonRecord {
+        self.quant.decode(&self.photons[index as usize])
+    }
+
+    /// The compact photon at `index` (tree order).
+    ///
+    /// # Panics
+    /// If `index >= self.len()`.
+    pub fn compact(&self, index: u32) -> &CompactPhoton {
+        &self.photons[index as usize]
+    }
+
+    /// All photons, decoded, in tree order (the `n`-th item has index `n`).
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = PhotonRecord> + '_ {
+        self.photons.iter().map(|p| self.quant.decode(p))
+    }
+
+    /// The frame the photons are quantised in (precision of the decoded values).
+    pub fn quantizer(&self) -> &Quantizer {
+        &self.quant
+    }
+
+    /// Bytes one stored photon takes (16).
+    pub fn bytes_per_photon(&self) -> usize {
+        std::mem::size_of::<CompactPhoton>()
+    }
+
+    /// Bytes the map holds (its allocated photon array plus the struct itself).
+    pub fn memory_bytes(&self) -> usize {
+        self.photons.capacity() * std::mem::size_of::<CompactPhoton>()
+            + std::mem::size_of::<Self>()
+    }
+
+    /// A hash of the compact photons in tree order and of the quantisation frame:
+    /// equal for equal maps, to check that builds are reproducible.
+    pub fn checksum(&self) -> u64 {
+        let frame = self.quant.bits().iter().fold(mix64(0), |h, &b| hash2(h, b));
+        self.photons.iter().fold(frame, |h, p| {
+            let (a, b) = p.bits();
+            hash2(hash2(h, a), b)
+        })
+    }
+}
+
+fn is_valid(r: &PhotonRecord) -> bool {
+    r.position.is_finite()
+        && r.power.is_finite()
+        && r.direction.is_finite()
+        && r.direction != Vec3::ZERO
+}
+
+/// Turns `photons` into its kd-tree in place (see the module docs for the layout).
+fn build_subtree(photons: &mut [CompactPhoton]) {
+    let n = photons.len();
+    if n <= LEAF_SIZE {
+        photons.sort_unstable_by_key(|p| p.key(0));
+        return;
+    }
+    let axis = widest_axis(photons);
+    let mid = n / 2;
+    photons.select_nth_unstable_by_key(mid, |p| p.key(axis));
+    photons[mid].set_axis(axis);
+    let (left, rest) = photons.split_at_mut(mid);
+    let right = &mut rest[1..];
+    if n >= PARALLEL_MIN {
+        rayon::join(|| build_subtree(left), || build_subtree(right));
+    } else {
+        build_subtree(left);
+        build_subtree(right);
+    }
+}
+
+/// The axis along which the photons' bounding box is longest (ties: lowest axis).
+fn widest_axis(photons: &[CompactPhoton]) -> usize {
+    let (lo, hi) = photons.iter().fold(
+        ([u32::MAX; 3], [0u32; 3]),
+        |(mut lo, mut hi), p| {
+            let g = p.grid();
+            for a in 0..3 {
+                lo[a] = lo[a].min(g[a]);
+                hi[a] = hi[a].max(g[a]);
+            }
+            (lo, hi)
+        },
+    );
+    let ext = [0, 1, 2].map(|a| hi[a] - lo[a]);
+    if ext[0] >= ext[1] && ext[0] >= ext[2] {
+        0
+    } else if ext[1] >= ext[2] {
+        1
+    } else {
+        2
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Checks the kd-tree invariant on every node: left coordinates <= the node's,
+    /// right ones >= it, on the node's axis.
+    fn check_subtree(p: &[CompactPhoton]) {
+        let n = p.len();
+        if n <= LEAF_SIZE {
+            return;
+        }
+        let mid = n / 2;
+        let (axis, split) = (p[mid].axis(), p[mid].coord(p[mid].axis()));
+        assert!(p[..mid].iter().all(|q| q.coord(axis) <= split));
+        assert!(p[mid + 1..].iter().all(|q| q.coord(axis) >= split));
+        check_subtree(&p[..mid]);
+        check_subtree(&p[mid + 1..]);
+    }
+
+    #[test]
+    fn tree_invariant_holds_and_input_order_does_not_matter() {
+        let mut rng = crate::rng::Rng::new(7);
+        let mut records: Vec<PhotonRecord> = (0..5000)
+            .map(|i| PhotonRecord {
+                // A coarse lattice makes many equal coordinates (ties at splits).
+                position: Vec3::new(
+                    (rng.next_f32() * 8.0).floor(),
+                    rng.next_f32(),
+                    (i % 3) as f32,
+                ),
+                power: Vec3::splat(rng.next_f32()),
+                direction: Vec3::Z,
+                depth: (i % 4) as u8,
+            })
+            .collect();
+        let map = PhotonMap::build(&records);
+        check_subtree(&map.photons);
+        records.reverse();
+        assert_eq!(PhotonMap::build(&records).checksum(), map.checksum());
+    }
+}

@@ -1,0 +1,386 @@
+//! The compact photon: 16 bytes, against 20–28 for Jensen's photon.
+//!
+//! | word | bits | content |
+//! |------|------|---------|
+//! | `pos: u64` | 3 × 21 (+1 unused) | position, quantised on a uniform grid over the map's bounds |
+//! | `power: u32` | 3 × 9 + 5 | RGB power, shared exponent, relative to the map's largest channel |
+//! | `dir: u32` | 2 × 12 + 6 + 2 | octahedral direction of travel, bounce depth, kd-tree split axis |
+//!
+//! Precision (all bounds are tested in `tests/kdtree.rs`):
+//! - **Position**: one grid step `s = extent / (2^21 - 1)` on every axis, where `extent`
+//!   is the largest side of the map's bounding box; each coordinate is off by at most
+//!   `s / 2` (plus the f32 rounding of the decoded value): 2.4e-7 of the extent.
+//! - **Power**: `P` is the largest channel of the whole map; a photon's three channels
+//!   share an exponent `E` in `[0, 31]` with 9-bit mantissas `m`: `channel = m 2^(E-39) P`.
+//!   Each channel is off by at most `2^-9` times the photon's largest channel (half a
+//!   mantissa step), for photons whose largest channel is above `2^-31 P`; below that
+//!   the error is at most `2^-40 P` (the photon is then almost black next to the map's
+//!   brightest). Negative channels are stored as 0.
+//! - **Direction**: octahedral map (Cigolle et al. 2014) on a 4095 × 4095 grid (codes
+//!   0..=4094 so that 0 and the poles are exact). Rounding moves each octahedral
+//!   coordinate by at most `h / 2` with `h = 2 / 4094`; the octahedron point moves by at
+//!   most `sqrt(1.5) h` and normalising scales lengths by at most `sqrt(3)` (the
+//!   octahedron's smallest radius is `1/sqrt(3)`), so the angular error is at most
+//!   `sqrt(4.5) h` = 1.04e-3 rad = 0.059° ([`MAX_DIRECTION_ERROR`]).
+//! - **Depth**: 6 bits; depths above [`MAX_DEPTH`] are stored as `MAX_DEPTH`.
+
+use super::PhotonRecord;
+use glam::Vec3;
+
+/// Bits per position coordinate.
+pub const POSITION_BITS: u32 = 21;
+/// Largest quantised position coordinate.
+pub(crate) const POSITION_MAX: u32 = (1 << POSITION_BITS) - 1;
+const POSITION_MASK: u64 = POSITION_MAX as u64;
+
+/// Largest bounce depth a compact photon stores; deeper photons are stored at this depth.
+pub const MAX_DEPTH: u8 = 63;
+
+/// Upper bound of the angle (radians) between a direction and its decoded value:
+/// `sqrt(4.5) * 2 / 4094` (see the module docs), rounded up, plus f32 slack.
+pub const MAX_DIRECTION_ERROR: f32 = 1.04e-3;
+
+/// Relative bound of the power error: every channel is within this fraction of the
+/// photon's largest channel (see the module docs for very dark photons).
+pub const POWER_RELATIVE_ERROR: f32 = 1.0 / 512.0;
+
+/// Largest octahedral code; the codes are 0..=OCT_MAX with OCT_MAX / 2 mapping to 0.
+const OCT_MAX: u32 = 4094;
+const OCT_BITS: u32 = 12;
+const OCT_MASK: u32 = (1 << OCT_BITS) - 1;
+const DEPTH_SHIFT: u32 = 24;
+const AXIS_SHIFT: u32 = 30;
+/// Power exponent offset: `channel = m 2^(E - POWER_BIAS) P`, so that the map's largest
+/// channel (1 after normalising by `P`) has `E = 31, m = 256`.
+const POWER_BIAS: i32 = 39;
+
+/// A photon in 16 bytes. Decode it with the [`Quantizer`] of the map that holds it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[repr(C)]
+pub struct CompactPhoton {
+    pos: u64,
+    power: u32,
+    dir: u32,
+}
+
+impl CompactPhoton {
+    /// A value that [`Quantizer::encode`] never returns (its octahedral codes are
+    /// out of range): marks skipped records during the build.
+    pub(crate) const INVALID: CompactPhoton = CompactPhoton {
+        pos: u64::MAX,
+        power: u32::MAX,
+        dir: u32::MAX,
+    };
+
+    /// Quantised position, in grid steps.
+    #[inline(always)]
+    pub fn grid(&self) -> [u32; 3] {
+        [
+            (self.pos & POSITION_MASK) as u32,
+            ((self.pos >> POSITION_BITS) & POSITION_MASK) as u32,
+            ((self.pos >> (2 * POSITION_BITS)) & POSITION_MASK) as u32,
+        ]
+    }
+
+    /// One quantised coordinate (`axis` in 0..3).
+    #[inline(always)]
+    pub fn coord(&self, axis: usize) -> u32 {
+        ((self.pos >> (axis as u32 * POSITION_BITS)) & POSITION_MASK) as u32
+    }
+
+    /// The kd-tree split axis stored with this photon (meaningful for inner nodes only).
+    #[inline(always)]
+    pub fn axis(&self) -> usize {
+        (self.dir >> AXIS_SHIFT) as usize
+    }
+
+    #[inline]
+    pub(crate) fn set_axis(&mut self, axis: usize) {
+        debug_assert!(axis < 3);
+        self.dir = (self.dir & !(3 << AXIS_SHIFT)) | ((axis as u32) << AXIS_SHIFT);
+    }
+
+    /// Bounce depth (0 = stored at the first hit after leaving the light).
+    #[inline]
+    pub fn depth(&self) -> u8 {
+        ((self.dir >> DEPTH_SHIFT) & 63) as u8
+    }
+
+    /// Direction of travel, decoded and normalised.
+    #[inline]
+    pub fn direction(&self) -> Vec3 {
+        self.direction_unnormalised().normalize()
+    }
+
+    /// Direction of travel on the octahedron (`|x| + |y| + |z| = 1`): enough for signs
+    /// of dot products, without the square root.
+    #[inline]
+    pub fn direction_unnormalised(&self) -> Vec3 {
+        let step = 2.0 / OCT_MAX as f32;
+        let x = (self.dir & OCT_MASK) as f32 * step - 1.0;
+        let y = ((self.dir >> OCT_BITS) & OCT_MASK) as f32 * step - 1.0;
+        oct_unfold(x, y)
+    }
+
+    /// The two words as one `u128`, for hashing and total ordering.
+    #[inline]
+    pub(crate) fn bits(&self) -> (u64, u64) {
+        (self.pos, ((self.power as u64) << 32) | self.dir as u64)
+    }
+
+    /// A total order whose first key is the coordinate on `axis`: the position word
+    /// rotated so that `axis` comes first, then the power and direction words. Equal
+    /// keys mean bitwise-equal photons, which is what makes the build canonical.
+    #[inline(always)]
+    pub(crate) fn key(&self, axis: usize) -> (u64, u64) {
+        // Rotating the 63 used bits left by 42 - 21 axis moves `axis` to the top.
+        const USED: u64 = (1 << (3 * POSITION_BITS)) - 1;
+        let r = (2 - axis as u32) * POSITION_BITS;
+        let pos = ((self.pos << r) | (self.pos >> (3 * POSITION_BITS - r))) & USED;
+        // Clear the axis bits: they are written during the build and must not reorder.
+        let rest = ((self.power as u64) << 32) | (self.dir & !(3 << AXIS_SHIFT)) as u64;
+        (pos, rest)
+    }
+}
+
+/// `(x, y)` in `[-1, 1]^2` to the octahedron; the lower half is folded out to the corners.
+#[inline]
+fn oct_unfold(x: f32, y: f32) -> Vec3 {
+    let z = 1.0 - x.abs() - y.abs();
+    if z < 0.0 {
+        Vec3::new(
+            (1.0 - y.abs()) * sign_not_zero(x),
+            (1.0 - x.abs()) * sign_not_zero(y),
+            z,
+        )
+    } else {
+        Vec3::new(x, y, z)
+    }
+}
+
+#[inline]
+fn sign_not_zero(v: f32) -> f32 {
+    if v >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+/// Octahedral code of a non-zero direction.
+fn oct_encode(d: Vec3) -> u32 {
+    let n = d / (d.x.abs() + d.y.abs() + d.z.abs());
+    let (x, y) = if n.z < 0.0 {
+        (
+            (1.0 - n.y.abs()) * sign_not_zero(n.x),
+            (1.0 - n.x.abs()) * sign_not_zero(n.y),
+        )
+    } else {
+        (n.x, n.y)
+    };
+    let q = |v: f32| ((v.clamp(-1.0, 1.0) + 1.0) * (OCT_MAX as f32 / 2.0)).round() as u32;
+    q(x) | (q(y) << OCT_BITS)
+}
+
+/// The map-wide frame that compact photons are quantised in: the grid origin and step
+/// for positions, the largest power channel for powers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quantizer {
+    origin: [f64; 3],
+    step: f64,
+    inv_step: f64,
+    power_scale: f64,
+}
+
+impl Quantizer {
+    /// A frame for photons inside the box `[min, max]` whose largest power channel is
+    /// `max_power`. Non-finite or inverted bounds give a frame with the box `[0, 0]`
+    /// (every position then decodes to the origin); a non-positive or non-finite
+    /// `max_power` stores every power as 0.
+    pub fn new(min: Vec3, max: Vec3, max_power: f32) -> Self {
+        let ok = min.is_finite() && max.is_finite() && min.cmple(max).all();
+        let (min, max) = if ok { (min, max) } else { (Vec3::ZERO, Vec3::ZERO) };
+        let extent = (0..3)
+            .map(|a| max[a] as f64 - min[a] as f64)
+            .fold(0.0, f64::max);
+        // A zero extent (one point) still needs an invertible step; any value works.
+        let step = if extent > 0.0 {
+            extent / POSITION_MAX as f64
+        } else {
+            1.0
+        };
+        let power_scale = if max_power.is_finite() && max_power > 0.0 {
+            max_power as f64
+        } else {
+            0.0
+        };
+        Quantizer {
+            origin: [min.x as f64, min.y as f64, min.z as f64],
+            step,
+            inv_step: 1.0 / step,
+            power_scale,
+        }
+    }
+
+    /// The grid step (world units): positions are off by at most half of it per axis.
+    pub fn step(&self) -> f64 {
+        self.step
+    }
+
+    /// Largest error of a decoded coordinate (world units): half a grid step plus the
+    /// f32 rounding of a coordinate of magnitude `magnitude`.
+    pub fn position_error_bound(&self, magnitude: f32) -> f32 {
+        (0.5 * self.step) as f32 + magnitude.abs() * f32::EPSILON
+    }
+
+    /// The largest power channel the powers are stored relative to.
+    pub fn power_scale(&self) -> f64 {
+        self.power_scale
+    }
+
+    /// Packs a record. The caller checks that the position, power and direction are
+    /// finite and the direction non-zero (`PhotonMap::build` skips other records);
+    /// positions outside the box are clamped onto it.
+    pub fn encode(&self, r: &PhotonRecord) -> CompactPhoton {
+        let mut pos = 0u64;
+        for a in 0..3 {
+            let g = ((r.position[a] as f64 - self.origin[a]) * self.inv_step).round();
+            let g = g.clamp(0.0, POSITION_MAX as f64) as u64;
+            pos |= g << (a as u32 * POSITION_BITS);
+        }
+        let depth = r.depth.min(MAX_DEPTH) as u32;
+        CompactPhoton {
+            pos,
+            power: self.encode_power(r.power),
+            dir: oct_encode(r.direction) | (depth << DEPTH_SHIFT),
+        }
+    }
+
+    fn encode_power(&self, power: Vec3) -> u32 {
+        if self.power_scale == 0.0 {
+            return 0;
+        }
+        let c = [0, 1, 2].map(|i| (power[i].max(0.0) as f64 / self.power_scale).min(1.0));
+        let max = c[0].max(c[1]).max(c[2]);
+        if max < 2f64.powi(-POWER_BIAS - 2) {
+            return 0; // rounds to zero at the smallest exponent anyway
+        }
+        // Exact binary exponent of `max` (normal since max >= 2^-41): max in [2^e, 2^(e+1)).
+        let e = ((max.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+        // E - 39 = e - 8 puts the largest mantissa in [256, 512).
+        let mut exp = (e + POWER_BIAS - 8).clamp(0, 31);
+        let mantissa = |exp: i32, v: f64| (v * 2f64.powi(POWER_BIAS - exp)).round() as u32;
+        if mantissa(exp, max) >= 512 {
+            exp += 1; // rounding carried; max <= 1 keeps exp <= 31
+        }
+        let m = c.map(|v| mantissa(exp, v).min(511));
+        m[0] | (m[1] << 9) | (m[2] << 18) | ((exp as u32) << 27)
+    }
+
+    /// Decoded position (world units).
+    #[inline]
+    pub fn position(&self, p: &CompactPhoton) -> Vec3 {
+        let g = p.grid();
+        Vec3::new(
+            (self.origin[0] + g[0] as f64 * self.step) as f32,
+            (self.origin[1] + g[1] as f64 * self.step) as f32,
+            (self.origin[2] + g[2] as f64 * self.step) as f32,
+        )
+    }
+
+    /// Decoded power.
+    pub fn power(&self, p: &CompactPhoton) -> Vec3 {
+        let exp = (p.power >> 27) as i32;
+        let unit = 2f64.powi(exp - POWER_BIAS) * self.power_scale;
+        let m = |i: u32| ((p.power >> (9 * i)) & 511) as f64 * unit;
+        Vec3::new(m(0) as f32, m(1) as f32, m(2) as f32)
+    }
+
+    /// Unpacks a photon.
+    pub fn decode(&self, p: &CompactPhoton) -> PhotonRecord {
+        PhotonRecord {
+            position: self.position(p),
+            power: self.power(p),
+            direction: p.direction(),
+            depth: p.depth(),
+        }
+    }
+
+    /// A query point in grid units (f32; see `query.rs` for why it is clamped).
+    #[inline]
+    pub(crate) fn to_grid(&self, p: Vec3) -> [f32; 3] {
+        // 2^40 grid steps is 2^19 map extents away: any farther point is clamped there,
+        // which keeps squared distances finite in f32 (their order is kept).
+        const FAR: f64 = (1u64 << 40) as f64;
+        [0, 1, 2].map(|a| ((p[a] as f64 - self.origin[a]) * self.inv_step).clamp(-FAR, FAR) as f32)
+    }
+
+    /// A length in grid units.
+    #[inline]
+    pub(crate) fn grid_length(&self, r: f32) -> f64 {
+        r as f64 * self.inv_step
+    }
+
+    /// A squared length from grid units to world units.
+    #[inline]
+    pub(crate) fn world_dist2(&self, d2: f32) -> f32 {
+        (d2 as f64 * self.step * self.step) as f32
+    }
+
+    /// The frame's parameters as bits, for checksums.
+    pub(crate) fn bits(&self) -> [u64; 5] {
+        [
+            self.origin[0].to_bits(),
+            self.origin[1].to_bits(),
+            self.origin[2].to_bits(),
+            self.step.to_bits(),
+            self.power_scale.to_bits(),
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn compact_photon_is_16_bytes() {
+        assert_eq!(std::mem::size_of::<CompactPhoton>(), 16);
+    }
+
+    #[test]
+    fn key_puts_the_axis_first_and_ignores_the_split_axis() {
+        let q = Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0);
+        let r = |x: f32, y: f32| PhotonRecord {
+            position: Vec3::new(x, y, 0.5),
+            power: Vec3::ONE,
+            direction: Vec3::Z,
+            depth: 0,
+        };
+        let a = q.encode(&r(0.1, 0.9));
+        let mut b = q.encode(&r(0.9, 0.1));
+        assert!(a.key(0) < b.key(0));
+        assert!(a.key(1) > b.key(1));
+        let before = b.key(2);
+        b.set_axis(2);
+        assert_eq!(b.axis(), 2);
+        assert_eq!(b.key(2), before);
+        assert_eq!(q.decode(&b), q.decode(&q.encode(&r(0.9, 0.1))));
+    }
+
+    #[test]
+    fn invalid_marker_is_never_an_encoding() {
+        // Octahedral codes stop at 4094, the marker's are 4095.
+        let q = Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0);
+        for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z, Vec3::ONE] {
+            let p = q.encode(&PhotonRecord {
+                position: Vec3::ONE,
+                power: Vec3::ONE,
+                direction: d,
+                depth: 255,
+            });
+            assert_ne!(p.dir & 0x00FF_FFFF, CompactPhoton::INVALID.dir & 0x00FF_FFFF);
+            assert_eq!(p.depth(), MAX_DEPTH);
+        }
+    }
+}

@@ -1,0 +1,280 @@
+//! Queries of a [`PhotonMap`]: k nearest photons and photons within a radius.
+//!
+//! Distances are computed in grid units (the query point is converted once, photons
+//! are compared on their quantised coordinates, no decoding), in f32, and reported
+//! in world units. Pruning is exact: a subtree's lower bound is the sum of squared
+//! per-axis gaps to its region (Arya & Mount's incremental distance), computed with
+//! the same operations as a photon's distance, so float rounding cannot make the
+//! bound exceed the distance of a photon inside.
+//!
+//! Query points more than 2^40 grid steps (2^19 map extents) from the map are moved
+//! to that distance first, which keeps squared distances finite in f32.
+//!
+//! Bad arguments return no photon: a non-finite query point, `k == 0`, a negative or
+//! NaN radius. A radius of 0 returns the photons exactly at the query point (at its
+//! quantised position) and an infinite radius is unbounded.
+
+use super::kdtree::{PhotonMap, LEAF_SIZE};
+use super::photon::CompactPhoton;
+use super::Neighbor;
+use glam::Vec3;
+
+impl PhotonMap {
+    /// The (at most) `k` photons nearest to `p` within `max_radius` (inclusive),
+    /// written to `out` (cleared first) **sorted by increasing distance** (ties by
+    /// index). Among photons at exactly the k-th distance, which are kept is
+    /// deterministic but not specified.
+    pub fn nearest_k(&self, p: Vec3, k: usize, max_radius: f32, out: &mut Vec<Neighbor>) {
+        self.nearest_k_where(p, k, max_radius, out, |_| true);
+    }
+
+    /// Like [`PhotonMap::nearest_k`], counting only photons that arrived on the side
+    /// of the surface that `normal` points to: those whose direction of travel `d`
+    /// has `dot(d, normal) <= 0`. A zero `normal` accepts every photon.
+    pub fn nearest_k_facing(
+        &self,
+        p: Vec3,
+        normal: Vec3,
+        k: usize,
+        max_radius: f32,
+        out: &mut Vec<Neighbor>,
+    ) {
+        self.nearest_k_where(p, k, max_radius, out, |c| {
+            // The octahedral vector has the sign of the direction's dot products.
+            c.direction_unnormalised().dot(normal) <= 0.0
+        });
+    }
+
+    /// The `k` nearest photons that `accept` keeps (see [`PhotonMap::nearest_k`]).
+    /// `accept` is called only for photons close enough to enter the result.
+    pub fn nearest_k_where<F>(
+        &self,
+        p: Vec3,
+        k: usize,
+        max_radius: f32,
+        out: &mut Vec<Neighbor>,
+        accept: F,
+    ) where
+        F: Fn(&CompactPhoton) -> bool,
+    {
+        out.clear();
+        if k == 0 || self.is_empty() || !p.is_finite() || !(max_radius >= 0.0) {
+            return;
+        }
+        let r = self.quant.grid_length(max_radius);
+        let mut search = Knn {
+            q: self.quant.to_grid(p),
+            k,
+            r2: (r * r).min(f32::MAX as f64) as f32,
+            heap: out,
+            accept,
+        };
+        if max_radius == f32::INFINITY {
+            search.r2 = f32::INFINITY;
+        }
+        search.visit(&self.photons, 0, [0.0; 3]);
+        sort_neighbors(out);
+        for n in out.iter_mut() {
+            n.dist2 = self.quant.world_dist2(n.dist2);
+        }
+    }
+
+    /// Every photon within `radius` of `p` (inclusive), written to `out` (cleared
+    /// first) in an unspecified but deterministic order (sort by `dist2` if needed).
+    pub fn within_radius(&self, p: Vec3, radius: f32, out: &mut Vec<Neighbor>) {
+        out.clear();
+        if self.is_empty() || !p.is_finite() || !(radius >= 0.0) {
+            return;
+        }
+        let r = self.quant.grid_length(radius);
+        let mut search = Within {
+            q: self.quant.to_grid(p),
+            r2: if radius == f32::INFINITY {
+                f32::INFINITY
+            } else {
+                (r * r).min(f32::MAX as f64) as f32
+            },
+            out,
+        };
+        search.visit(&self.photons, 0, [0.0; 3]);
+        for n in out.iter_mut() {
+            n.dist2 = self.quant.world_dist2(n.dist2);
+        }
+    }
+}
+
+/// Squared distance in grid units.
+#[inline(always)]
+fn dist2(q: &[f32; 3], p: &CompactPhoton) -> f32 {
+    let g = p.grid();
+    let dx = q[0] - g[0] as f32;
+    let dy = q[1] - g[1] as f32;
+    let dz = q[2] - g[2] as f32;
+    dx * dx + dy * dy + dz * dz
+}
+
+/// Lower bound of the distance to a region, given its per-axis gaps; the same
+/// operations as [`dist2`] so that it never exceeds the distance of a photon inside.
+#[inline(always)]
+fn gap2(off: &[f32; 3]) -> f32 {
+    off[0] * off[0] + off[1] * off[1] + off[2] * off[2]
+}
+
+/// Inserts `n` into `heap`, a max-heap on `dist2` of at most `k` entries: pushed when
+/// the heap is not full, else it replaces the farthest (the caller checks that `n` is
+/// nearer than it).
+pub(crate) fn heap_insert(heap: &mut Vec<Neighbor>, k: usize, n: Neighbor) {
+    if heap.len() < k {
+        heap.push(n);
+        let mut i = heap.len() - 1;
+        while i > 0 {
+            let parent = (i - 1) / 2;
+            if heap[parent].dist2 >= n.dist2 {
+                break;
+            }
+            heap[i] = heap[parent];
+            i = parent;
+        }
+        heap[i] = n;
+    } else {
+        let len = heap.len();
+        let mut i = 0;
+        loop {
+            let l = 2 * i + 1;
+            if l >= len {
+                break;
+            }
+            let r = l + 1;
+            let c = if r < len && heap[r].dist2 > heap[l].dist2 {
+                r
+            } else {
+                l
+            };
+            if heap[c].dist2 <= n.dist2 {
+                break;
+            }
+            heap[i] = heap[c];
+            i = c;
+        }
+        heap[i] = n;
+    }
+}
+
+/// Sorts a finished k-nearest result by distance, then index.
+pub(crate) fn sort_neighbors(out: &mut [Neighbor]) {
+    out.sort_unstable_by(|a, b| a.dist2.total_cmp(&b.dist2).then(a.index.cmp(&b.index)));
+}
+
+/// k-nearest search state; `heap` is a max-heap on `dist2` (grid units) while searching.
+struct Knn<'a, F> {
+    q: [f32; 3],
+    k: usize,
+    r2: f32,
+    heap: &'a mut Vec<Neighbor>,
+    accept: F,
+}
+
+impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
+    /// Whether a region at squared gap `g2` may hold a photon that enters the result.
+    #[inline(always)]
+    fn may_enter(&self, g2: f32) -> bool {
+        if self.heap.len() == self.k {
+            g2 < self.heap[0].dist2
+        } else {
+            g2 <= self.r2
+        }
+    }
+
+    #[inline(always)]
+    fn consider(&mut self, index: usize, p: &CompactPhoton) {
+        let d2 = dist2(&self.q, p);
+        if self.may_enter(d2) && (self.accept)(p) {
+            self.insert(Neighbor {
+                index: index as u32,
+                dist2: d2,
+            });
+        }
+    }
+
+    #[inline]
+    fn insert(&mut self, n: Neighbor) {
+        heap_insert(self.heap, self.k, n);
+    }
+
+    /// Searches the subtree `photons` (which starts at `base` in the map); `off` are
+    /// the per-axis gaps from the query point to the subtree's region.
+    fn visit(&mut self, photons: &[CompactPhoton], base: usize, mut off: [f32; 3]) {
+        let n = photons.len();
+        if n <= LEAF_SIZE {
+            for (i, p) in photons.iter().enumerate() {
+                self.consider(base + i, p);
+            }
+            return;
+        }
+        let mid = n / 2;
+        let node = &photons[mid];
+        let axis = node.axis();
+        let d = self.q[axis] - node.coord(axis) as f32;
+        let (left, right) = (&photons[..mid], &photons[mid + 1..]);
+        if d < 0.0 {
+            self.visit(left, base, off);
+        } else {
+            self.visit(right, base + mid + 1, off);
+        }
+        self.consider(base + mid, node);
+        off[axis] = d.abs();
+        if self.may_enter(gap2(&off)) {
+            if d < 0.0 {
+                self.visit(right, base + mid + 1, off);
+            } else {
+                self.visit(left, base, off);
+            }
+        }
+    }
+}
+
+/// Fixed-radius search state (grid units while searching).
+struct Within<'a> {
+    q: [f32; 3],
+    r2: f32,
+    out: &'a mut Vec<Neighbor>,
+}
+
+impl Within<'_> {
+    #[inline(always)]
+    fn consider(&mut self, index: usize, p: &CompactPhoton) {
+        let d2 = dist2(&self.q, p);
+        if d2 <= self.r2 {
+            self.out.push(Neighbor {
+                index: index as u32,
+                dist2: d2,
+            });
+        }
+    }
+
+    fn visit(&mut self, photons: &[CompactPhoton], base: usize, mut off: [f32; 3]) {
+        let n = photons.len();
+        if n <= LEAF_SIZE {
+            for (i, p) in photons.iter().enumerate() {
+                self.consider(base + i, p);
+            }
+            return;
+        }
+        let mid = n / 2;
+        let node = &photons[mid];
+        let axis = node.axis();
+        let d = self.q[axis] - node.coord(axis) as f32;
+        let (left, right) = (&photons[..mid], &photons[mid + 1..]);
+        let (near, near_base, far, far_base) = if d < 0.0 {
+            (left, base, right, base + mid + 1)
+        } else {
+            (right, base + mid + 1, left, base)
+        };
+        self.visit(near, near_base, off);
+        self.consider(base + mid, node);
+        off[axis] = d.abs();
+        if gap2(&off) <= self.r2 {
+            self.visit(far, far_base, off);
+        }
+    }
+}
