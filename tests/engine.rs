@@ -16,12 +16,16 @@ fn closed_box(rho: f32, cosn: f32) -> Scene {
     let mut s = Scene::new();
     let wall = s.add_material(Material {
         name: "wall".into(),
-        brdf: Brdf::Lambert(Lambert { albedo: Vec3::splat(rho) }),
+        brdf: Brdf::Lambert(Lambert {
+            albedo: Vec3::splat(rho),
+        }),
         emission: None,
     });
     let light = s.add_material(Material {
         name: "light".into(),
-        brdf: Brdf::Lambert(Lambert { albedo: Vec3::splat(rho) }),
+        brdf: Brdf::Lambert(Lambert {
+            albedo: Vec3::splat(rho),
+        }),
         emission: Some(Emission {
             radiance: Vec3::splat(10.0),
             profile: CosN::new(cosn).unwrap(),
@@ -29,19 +33,45 @@ fn closed_box(rho: f32, cosn: f32) -> Scene {
     });
     let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
     let corners = vec![
-        p(0., 0., 0.), p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.),
-        p(0., 0., 1.), p(1., 0., 1.), p(1., 1., 1.), p(0., 1., 1.),
+        p(0., 0., 0.),
+        p(1., 0., 0.),
+        p(1., 1., 0.),
+        p(0., 1., 0.),
+        p(0., 0., 1.),
+        p(1., 0., 1.),
+        p(1., 1., 1.),
+        p(0., 1., 1.),
     ];
-    let quads = [[0, 1, 2, 3], [4, 7, 6, 5], [0, 4, 5, 1], [3, 2, 6, 7], [0, 3, 7, 4], [1, 5, 6, 2]];
-    let tris = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+    let quads = [
+        [0, 1, 2, 3],
+        [4, 7, 6, 5],
+        [0, 4, 5, 1],
+        [3, 2, 6, 7],
+        [0, 3, 7, 4],
+        [1, 5, 6, 2],
+    ];
+    let tris = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
     s.add_mesh("box", corners, tris, wall).unwrap();
     // facing down (-y) at y = 0.99
-    let l = vec![p(0.3, 0.99, 0.3), p(0.3, 0.99, 0.7), p(0.7, 0.99, 0.7), p(0.7, 0.99, 0.3)];
-    s.add_mesh("light", l, vec![[0, 1, 2], [0, 2, 3]], light).unwrap();
+    let l = vec![
+        p(0.3, 0.99, 0.3),
+        p(0.3, 0.99, 0.7),
+        p(0.7, 0.99, 0.7),
+        p(0.7, 0.99, 0.3),
+    ];
+    s.add_mesh("light", l, vec![[0, 1, 2], [0, 2, 3]], light)
+        .unwrap();
     s
 }
 
-fn run(scene: &Scene, cfg: &TraceConfig, threads: usize) -> (adaptive_pm::engine::TraceOutput, u64) {
+fn run(
+    scene: &Scene,
+    cfg: &TraceConfig,
+    threads: usize,
+) -> (adaptive_pm::engine::TraceOutput, u64) {
     let device = Device::new().unwrap();
     let rt = scene.commit(&device).unwrap();
     let pool = thread_pool(threads).unwrap();
@@ -90,7 +120,12 @@ fn stored_power_per_depth_is_phi_rho_to_the_d() {
     c.max_depth = 6;
     let (out, _) = run(&scene, &c, 2);
     let total: f64 = (0..=6).map(|d| phi * (rho as f64).powi(d)).sum();
-    let got: f64 = out.report.depths.iter().map(|d| d.stored_power_luminance).sum();
+    let got: f64 = out
+        .report
+        .depths
+        .iter()
+        .map(|d| d.stored_power_luminance)
+        .sum();
     // sd of the total is below the sum of the per-depth sds
     let sd: f64 = (0..=6)
         .map(|d| {
@@ -98,8 +133,14 @@ fn stored_power_per_depth_is_phi_rho_to_the_d() {
             phi / n as f64 * (n as f64 * p * (1.0 - p)).sqrt()
         })
         .sum();
-    assert!((got - total).abs() < 5.0 * sd + 1e-4 * total, "density: {got} vs {total}");
-    assert!(out.report.density_rejected > 0, "density control rejected nothing");
+    assert!(
+        (got - total).abs() < 5.0 * sd + 1e-4 * total,
+        "density: {got} vs {total}"
+    );
+    assert!(
+        out.report.density_rejected > 0,
+        "density control rejected nothing"
+    );
 }
 
 #[test]
@@ -132,7 +173,10 @@ fn splitting_is_unbiased_floor_irradiance() {
     }
     let ((mc, sc), (ma, sa)) = (stats[0], stats[1]);
     assert!(mc > 0.0 && ma > 0.0);
-    assert!((mc - ma).abs() < 4.0 * (sc * sc + sa * sa).sqrt(), "classic {mc} ± {sc}, adaptive {ma} ± {sa}");
+    assert!(
+        (mc - ma).abs() < 4.0 * (sc * sc + sa * sa).sqrt(),
+        "classic {mc} ± {sc}, adaptive {ma} ± {sa}"
+    );
 }
 
 #[test]
@@ -146,9 +190,15 @@ fn adaptive_first_bounce_reemits_n_max_whatever_the_exponent() {
         // Each of the N_l hits makes floor(m) or floor(m)+1 children with mean
         // m = N_MAX / N_l: the total has mean N_MAX and sd <= sqrt(N_l) / 2.
         let sd = emitted.sqrt() / 2.0;
-        assert!((got - n_max as f64).abs() < 5.0 * sd + 1.0, "n={cosn}: {got} vs {n_max} (emitted {emitted})");
+        assert!(
+            (got - n_max as f64).abs() < 5.0 * sd + 1.0,
+            "n={cosn}: {got} vs {n_max} (emitted {emitted})"
+        );
         if cosn > 0.0 {
-            assert!(out.report.emitted < n_max, "n={cosn}: a directional light emits fewer photons");
+            assert!(
+                out.report.emitted < n_max,
+                "n={cosn}: a directional light emits fewer photons"
+            );
         }
     }
 }
@@ -174,7 +224,11 @@ fn same_checksum_on_one_and_two_threads_and_any_batch() {
 #[test]
 fn quality_zero_is_an_empty_map_and_one_is_a_budget_error() {
     let scene = Scene::cornell().unwrap();
-    let (out, _) = run(&scene, &TraceConfig::new(Mode::Adaptive, Budget::Quality(0.0)), 2);
+    let (out, _) = run(
+        &scene,
+        &TraceConfig::new(Mode::Adaptive, Budget::Quality(0.0)),
+        2,
+    );
     assert_eq!(out.report.emitted, 0);
     assert!(out.records.is_empty());
     assert!(Maps::build(&out.records).full.is_empty());
@@ -183,10 +237,19 @@ fn quality_zero_is_an_empty_map_and_one_is_a_budget_error() {
     let rt = scene.commit(&device).unwrap();
     let mut t = Tracer::new(&scene, &rt);
     for mode in [Mode::Classic, Mode::Adaptive] {
-        let e = t.trace(&TraceConfig::new(mode, Budget::Quality(1.0))).unwrap_err();
+        let e = t
+            .trace(&TraceConfig::new(mode, Budget::Quality(1.0)))
+            .unwrap_err();
         match &e {
-            Error::Budget { photons, needed_bytes, budget_bytes } => {
-                assert!(*photons > 1_000_000_000 && needed_bytes > budget_bytes, "{e}");
+            Error::Budget {
+                photons,
+                needed_bytes,
+                budget_bytes,
+            } => {
+                assert!(
+                    *photons > 1_000_000_000 && needed_bytes > budget_bytes,
+                    "{e}"
+                );
             }
             other => panic!("expected a budget error, got {other}"),
         }
@@ -203,8 +266,14 @@ fn quality_zero_is_an_empty_map_and_one_is_a_budget_error() {
 #[test]
 fn lights_a_million_times_apart_both_emit_and_a_dark_light_does_not() {
     let mut scene = closed_box(0.5, 0.0);
-    scene.add_light(Light::Point(PointLight { position: Vec3::splat(0.5), intensity: Vec3::splat(1e-5) }));
-    scene.add_light(Light::Point(PointLight { position: Vec3::new(0.5, 0.2, 0.5), intensity: Vec3::ZERO }));
+    scene.add_light(Light::Point(PointLight {
+        position: Vec3::splat(0.5),
+        intensity: Vec3::splat(1e-5),
+    }));
+    scene.add_light(Light::Point(PointLight {
+        position: Vec3::new(0.5, 0.2, 0.5),
+        intensity: Vec3::ZERO,
+    }));
     for mode in [Mode::Classic, Mode::Density, Mode::Adaptive] {
         let (out, _) = run(&scene, &cfg(mode, 10_000, 1), 2);
         let per = &out.report.emitted_per_light;
@@ -219,7 +288,9 @@ fn scene_without_light_is_an_error() {
     scene.lights.clear();
     let device = Device::new().unwrap();
     let rt = scene.commit(&device).unwrap();
-    let e = Tracer::new(&scene, &rt).trace(&cfg(Mode::Classic, 100, 1)).unwrap_err();
+    let e = Tracer::new(&scene, &rt)
+        .trace(&cfg(Mode::Classic, 100, 1))
+        .unwrap_err();
     assert!(matches!(e, Error::InvalidScene(_)), "{e}");
 }
 
@@ -234,13 +305,19 @@ fn albedo_zero_and_one_and_extreme_exponents_terminate() {
             let r = &out.report;
             assert!(r.depths.len() <= 9, "{mode:?} rho={rho}: depth bound");
             if rho == 0.0 {
-                assert_eq!(r.stored, r.stored_primary, "{mode:?}: albedo 0 stores first hits only");
+                assert_eq!(
+                    r.stored, r.stored_primary,
+                    "{mode:?}: albedo 0 stores first hits only"
+                );
             }
             if rho == 1.0 && mode == Mode::Classic {
                 // no absorption: every photon survives to the depth limit
                 assert_eq!(r.depths[8].hits, r.emitted);
             }
-            assert!(out.records.iter().all(|p| p.power.is_finite() && p.position.is_finite()));
+            assert!(out
+                .records
+                .iter()
+                .all(|p| p.power.is_finite() && p.position.is_finite()));
         }
     }
 }

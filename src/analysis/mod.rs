@@ -268,5 +268,10 @@ pub fn analyze_brdf(b: &Brdf, est: Estimator, p: &AnalysisParams) -> Result<Dire
         tc += d.cluster_time;
         alphas.push(d.alpha_d);
     }
-    Ok(DirectionalityTable::from_values(&alphas, p.alpha_min, ts, tc))
+    Ok(DirectionalityTable::from_values(
+        &alphas,
+        p.alpha_min,
+        ts,
+        tc,
+    ))
 }

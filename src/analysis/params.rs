@@ -71,7 +71,10 @@ impl AnalysisParams {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(Error::param(name, format!("must be finite and > 0, got {v}")))
+                Err(Error::param(
+                    name,
+                    format!("must be finite and > 0, got {v}"),
+                ))
             }
         };
         let unit = |name: &'static str, v: f32| {
@@ -89,7 +92,10 @@ impl AnalysisParams {
             if (lo..=hi).contains(&v) {
                 Ok(())
             } else {
-                Err(Error::param(name, format!("must be in [{lo}, {hi}], got {v}")))
+                Err(Error::param(
+                    name,
+                    format!("must be in [{lo}, {hi}], got {v}"),
+                ))
             }
         };
         count("samples", self.samples, 16, MAX_SAMPLES)?;

@@ -54,7 +54,10 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
     println!("scene      {}", args.scene);
     println!("triangles  {}", scene.triangle_count());
     if scene.skipped_degenerate > 0 {
-        println!("skipped    {} zero-area triangles", scene.skipped_degenerate);
+        println!(
+            "skipped    {} zero-area triangles",
+            scene.skipped_degenerate
+        );
     }
     println!("meshes     {}", scene.meshes.len());
     for m in &scene.meshes {
@@ -72,14 +75,22 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             "  {:<16} {}{}",
             m.name,
             brdf_name(&m.brdf),
-            if m.emission.is_some() { "  (emissive)" } else { "" }
+            if m.emission.is_some() {
+                "  (emissive)"
+            } else {
+                ""
+            }
         );
     }
     println!("lights     {}", scene.lights.len());
     for l in &scene.lights {
         let p = l.power();
         let extra = match l {
-            Light::Area(a) => format!("area {:.1}  cos^n n = {}", a.area, a.emission.profile.exponent()),
+            Light::Area(a) => format!(
+                "area {:.1}  cos^n n = {}",
+                a.area,
+                a.emission.profile.exponent()
+            ),
             _ => "punctual (alpha_A = 1)".to_string(),
         };
         println!(
@@ -90,9 +101,15 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             p.z
         );
     }
-    println!("bounds     ({:.1}, {:.1}, {:.1}) .. ({:.1}, {:.1}, {:.1})", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+    println!(
+        "bounds     ({:.1}, {:.1}, {:.1}) .. ({:.1}, {:.1}, {:.1})",
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+    );
     if let Some(c) = scene.camera {
-        println!("camera     eye {}  forward {}  vfov {:.4} deg", c.eye, c.forward, c.vfov_deg);
+        println!(
+            "camera     eye {}  forward {}  vfov {:.4} deg",
+            c.eye, c.forward, c.vfov_deg
+        );
     }
     Ok(())
 }

@@ -40,7 +40,9 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         })
     })?;
     bar.finish_and_clear();
-    let points = scene.surface_sampler().points(DENSITY_POINTS, DENSITY_POINTS_SEED);
+    let points = scene
+        .surface_sampler()
+        .points(DENSITY_POINTS, DENSITY_POINTS_SEED);
     let (maps, metrics) = pool.install(|| {
         let maps = Maps::build(&out.records);
         let metrics = measure(&maps, &points);
@@ -84,7 +86,14 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         println!("{value}");
         return Ok(());
     }
-    println!("{} on {}: N_MAX = {}, seed {}, {} threads", args.mode.name(), args.scene, r.n_max, cfg.seed, pool.current_num_threads());
+    println!(
+        "{} on {}: N_MAX = {}, seed {}, {} threads",
+        args.mode.name(),
+        args.scene,
+        r.n_max,
+        cfg.seed,
+        pool.current_num_threads()
+    );
     for (i, p) in out.plans.iter().enumerate() {
         println!(
             "  light {i}: {} photons (alpha_E {:.3}, alpha_A {:.3}, alpha_D {:.4})",
@@ -93,8 +102,15 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     }
     println!("emitted        {}", r.emitted);
     println!("stored         {} ({} primary)", r.stored, r.stored_primary);
-    println!("re-emitted     {} after the first hit", r.reemitted_first_hit);
-    let rates: Vec<String> = r.split_rate_by_depth.iter().map(|x| format!("{x:.3}")).collect();
+    println!(
+        "re-emitted     {} after the first hit",
+        r.reemitted_first_hit
+    );
+    let rates: Vec<String> = r
+        .split_rate_by_depth
+        .iter()
+        .map(|x| format!("{x:.3}"))
+        .collect();
     println!("split rate     {} (by depth)", rates.join(" "));
     println!(
         "density        max {:.4e}  mean {:.4e}  sigma {:.4e}  sigma/mean {:.3}",
@@ -102,15 +118,27 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     );
     println!(
         "primary        max {:.4e}  mean {:.4e}  sigma {:.4e}  sigma/mean {:.3}",
-        metrics.primary.max, metrics.primary.mean, metrics.primary.sigma, metrics.primary.sigma_over_mean
+        metrics.primary.max,
+        metrics.primary.mean,
+        metrics.primary.sigma,
+        metrics.primary.sigma_over_mean
     );
-    println!("time           trace {:.3} s, kd-tree {:.3} s", r.trace_s, maps.build_s);
-    println!("memory         {:.0} bytes per photon", metrics.bytes_per_photon);
+    println!(
+        "time           trace {:.3} s, kd-tree {:.3} s",
+        r.trace_s, maps.build_s
+    );
+    println!(
+        "memory         {:.0} bytes per photon",
+        metrics.bytes_per_photon
+    );
     if r.budget_bound {
         println!("note: the memory budget bound (raise --budget-mb)");
     }
     if r.capped_hits > 0 {
-        println!("note: the per-hit split cap bound at {} hits", r.capped_hits);
+        println!(
+            "note: the per-hit split cap bound at {} hits",
+            r.capped_hits
+        );
     }
     println!("checksum       {:016x}", metrics.checksum);
     Ok(())

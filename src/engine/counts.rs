@@ -71,7 +71,11 @@ pub fn plan_emission(
                 power_luminance: lum as f32,
             },
             Mode::Adaptive => {
-                let alpha_e = if max_lum > 0.0 { (lum / max_lum) as f32 } else { 0.0 };
+                let alpha_e = if max_lum > 0.0 {
+                    (lum / max_lum) as f32
+                } else {
+                    0.0
+                };
                 let alpha_a = match light.area() {
                     Some(a) if max_area > 0.0 => a / max_area,
                     _ => 1.0,

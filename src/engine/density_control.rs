@@ -18,6 +18,7 @@
 //! not depend on the thread count. This pass is sequential, which is the
 //! method's cost (the paper's Fig. 7b).
 
+use crate::error::Result;
 use crate::photon_map::{GrowingMap, Neighbor, PhotonRecord};
 use glam::Vec3;
 
@@ -31,16 +32,19 @@ pub(super) struct DensityControl {
 }
 
 impl DensityControl {
-    pub fn new(bounds: (Vec3, Vec3), target: f64, k: usize, expected: u64) -> Self {
+    pub fn new(bounds: (Vec3, Vec3), target: f64, k: usize) -> Result<Self> {
         let radius = (k as f64 / (std::f64::consts::PI * target)).sqrt() as f32;
-        DensityControl {
-            map: GrowingMap::new(bounds, radius, expected as usize),
+        // A cell never smaller than 2^-20 of the scene, so the grid stays small.
+        let extent = (bounds.1 - bounds.0).max_element().max(f32::MIN_POSITIVE);
+        let cell = radius.max(extent * 1e-6);
+        Ok(DensityControl {
+            map: GrowingMap::new(bounds.0, bounds.1, cell)?,
             radius,
             k,
             accepted: 0,
             rejected: 0,
             scratch: Vec::with_capacity(k),
-        }
+        })
     }
 
     pub fn offer(&mut self, records: &[PhotonRecord], normals: &[Vec3]) {
@@ -50,12 +54,12 @@ impl DensityControl {
             let same_side = self
                 .scratch
                 .iter()
-                .filter(|nb| self.map.record(nb.index).direction.dot(*n) < 0.0)
+                .filter(|nb| self.map.photon(nb.index).direction.dot(*n) < 0.0)
                 .count();
             if same_side >= self.k {
                 let share = rec.power / same_side as f32;
                 for nb in &self.scratch {
-                    if self.map.record(nb.index).direction.dot(*n) < 0.0 {
+                    if self.map.photon(nb.index).direction.dot(*n) < 0.0 {
                         self.map.add_power(nb.index, share);
                     }
                 }

@@ -49,7 +49,7 @@ impl Maps {
 }
 
 /// Density statistics of both maps.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug)]
 pub struct MapMetrics {
     /// Full map.
     pub full: DensityStats,
@@ -63,11 +63,16 @@ pub struct MapMetrics {
 
 /// Evaluates the density of both maps at `points`.
 pub fn measure(maps: &Maps, points: &[SurfacePoint]) -> MapMetrics {
-    let pts: Vec<glam::Vec3> = points.iter().map(|p| p.position).collect();
+    // A zero normal counts photons from both sides: points are where the
+    // density is measured, whichever side of a surface the light reached.
+    let pts: Vec<(glam::Vec3, glam::Vec3)> = points
+        .iter()
+        .map(|p| (p.position, glam::Vec3::ZERO))
+        .collect();
     MapMetrics {
         full: density_stats(&maps.full, &pts, DENSITY_K),
         primary: density_stats(&maps.primary, &pts, DENSITY_K),
-        bytes_per_photon: maps.full.bytes_per_photon(),
+        bytes_per_photon: maps.full.bytes_per_photon() as f64,
         checksum: maps.full.checksum(),
     }
 }

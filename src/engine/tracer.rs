@@ -18,12 +18,32 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
+/// alpha_D tables for the materials the scene's meshes use (adaptive mode
+/// only): only what the scene needs is analysed.
+fn material_tables(
+    scene: &Scene,
+    cache: &mut AnalysisCache,
+    mode: Mode,
+) -> Result<Vec<Option<Arc<DirectionalityTable>>>> {
+    let mut tables = vec![None; scene.materials.len()];
+    if mode != Mode::Adaptive {
+        return Ok(tables);
+    }
+    for mesh in &scene.meshes {
+        let m = mesh.material;
+        let brdf = &scene.materials[m].brdf;
+        if tables[m].is_none() && !brdf.is_delta() {
+            tables[m] = Some(cache.brdf(brdf)?);
+        }
+    }
+    Ok(tables)
+}
+
 /// Bytes one photon costs while a run is under way: its record, its queue
 /// entry, and its compact copy in the final map. Used to turn the memory
 /// budget into a photon count before anything is allocated.
-pub const BYTES_PER_PHOTON_IN_FLIGHT: u64 = (std::mem::size_of::<PhotonRecord>()
-    + std::mem::size_of::<PathState>()
-    + 16) as u64;
+pub const BYTES_PER_PHOTON_IN_FLIGHT: u64 =
+    (std::mem::size_of::<PhotonRecord>() + std::mem::size_of::<PathState>() + 16) as u64;
 
 /// Progress of a run, for a progress bar.
 #[derive(Clone, Copy, Debug)]
@@ -52,7 +72,7 @@ pub struct TraceOutput {
 pub struct Tracer<'s> {
     scene: &'s Scene,
     rt: &'s CommittedScene,
-    cache: AnalysisCache,
+    cache: Option<AnalysisCache>,
 }
 
 impl<'s> Tracer<'s> {
@@ -61,13 +81,13 @@ impl<'s> Tracer<'s> {
         Tracer {
             scene,
             rt,
-            cache: AnalysisCache::default(),
+            cache: None,
         }
     }
 
-    /// The analyses done so far.
-    pub fn analysis_cache(&self) -> &AnalysisCache {
-        &self.cache
+    /// The analyses done so far (`None` before the first run).
+    pub fn analysis_cache(&self) -> Option<&AnalysisCache> {
+        self.cache.as_ref()
     }
 
     /// Traces one run on the current rayon pool.
@@ -91,11 +111,18 @@ impl<'s> Tracer<'s> {
     ) -> Result<TraceOutput> {
         cfg.validate()?;
         self.scene.validate()?;
-        if self.cache.params() != &cfg.analysis || self.cache.estimator() != cfg.estimator {
-            self.cache = AnalysisCache::new(cfg.analysis.clone(), cfg.estimator);
+        let stale = self
+            .cache
+            .as_ref()
+            .is_none_or(|c| c.params() != &cfg.analysis || c.estimator() != cfg.estimator);
+        if stale {
+            self.cache = Some(AnalysisCache::new(cfg.analysis, cfg.estimator)?);
         }
+        let Some(cache) = self.cache.as_mut() else {
+            unreachable!("set just above")
+        };
         let n_max = cfg.budget.n_max()?;
-        let plans = plan_emission(self.scene, cfg.mode, n_max, &mut self.cache)?;
+        let plans = plan_emission(self.scene, cfg.mode, n_max, cache)?;
         let emitted: u64 = plans.iter().map(|p| p.photons).sum();
         let budget_bytes = cfg.memory_budget.unwrap_or_else(|| available_memory() / 2);
         let max_photons = budget_bytes / BYTES_PER_PHOTON_IN_FLIGHT;
@@ -106,7 +133,7 @@ impl<'s> Tracer<'s> {
                 budget_bytes,
             });
         }
-        let tables = self.material_tables(cfg.mode)?;
+        let tables = material_tables(self.scene, cache, cfg.mode)?;
         let (lo, hi) = self.scene.bounds();
         let epsilon = 1e-5 * (hi - lo).length().max(1e-3);
         let max_light_luminance = self
@@ -120,15 +147,27 @@ impl<'s> Tracer<'s> {
         let start = Instant::now();
         let mut queue = self.emit(cfg, &plans, epsilon);
         let mut records: Vec<PhotonRecord> = Vec::new();
-        let mut density = (cfg.mode == Mode::Density).then(|| {
-            let target = match cfg.density_target {
-                DensityTarget::PerArea(d) => d,
-                DensityTarget::Auto => {
-                    n_max as f64 / self.scene.surface_sampler().total_area().max(f64::MIN_POSITIVE)
-                }
-            };
-            DensityControl::new(self.scene.bounds(), target, DENSITY_CONTROL_K, emitted)
-        });
+        let mut density = match cfg.mode {
+            Mode::Density if emitted > 0 => {
+                let target = match cfg.density_target {
+                    DensityTarget::PerArea(d) => d,
+                    DensityTarget::Auto => {
+                        n_max as f64
+                            / self
+                                .scene
+                                .surface_sampler()
+                                .total_area()
+                                .max(f64::MIN_POSITIVE)
+                    }
+                };
+                Some(DensityControl::new(
+                    self.scene.bounds(),
+                    target,
+                    DENSITY_CONTROL_K,
+                )?)
+            }
+            _ => None,
+        };
         let mut splitting = cfg.mode == Mode::Adaptive;
         for depth in 0..=cfg.max_depth {
             if queue.is_empty() {
@@ -159,8 +198,13 @@ impl<'s> Tracer<'s> {
                 .par_chunks(cfg.batch)
                 .map(|batch| {
                     let out = shade_batch(&ctx, batch);
-                    let d = done.fetch_add(batch.len() as u64, Ordering::Relaxed) + batch.len() as u64;
-                    progress(Progress { depth, done: d, total });
+                    let d =
+                        done.fetch_add(batch.len() as u64, Ordering::Relaxed) + batch.len() as u64;
+                    progress(Progress {
+                        depth,
+                        done: d,
+                        total,
+                    });
                     out
                 })
                 .collect();
@@ -200,22 +244,6 @@ impl<'s> Tracer<'s> {
             report,
             plans,
         })
-    }
-
-    /// alpha_D tables for the materials the scene's meshes use (adaptive mode only).
-    fn material_tables(&mut self, mode: Mode) -> Result<Vec<Option<Arc<DirectionalityTable>>>> {
-        let mut tables = vec![None; self.scene.materials.len()];
-        if mode != Mode::Adaptive {
-            return Ok(tables);
-        }
-        for mesh in &self.scene.meshes {
-            let m = mesh.material;
-            let brdf = &self.scene.materials[m].brdf;
-            if tables[m].is_none() && !brdf.is_delta() {
-                tables[m] = Some(self.cache.brdf(brdf)?);
-            }
-        }
-        Ok(tables)
     }
 
     /// Wave 0: every light's photons, photon `i` of light `l` keyed by (seed, l, i).

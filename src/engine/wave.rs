@@ -88,7 +88,11 @@ fn shade_hit(ctx: &ShadeContext, p: &PathState, h: &Hit, out: &mut BatchOut) {
     out.hits += 1;
     let position = p.origin + p.direction * h.t;
     // Surfaces are two-sided: shade on the side the photon arrives from.
-    let n = if h.ng.dot(p.direction) > 0.0 { -h.ng } else { h.ng };
+    let n = if h.ng.dot(p.direction) > 0.0 {
+        -h.ng
+    } else {
+        h.ng
+    };
     let material = h.material as usize;
     let brdf: &Brdf = &ctx.scene.materials[material].brdf;
     if !brdf.is_delta() {

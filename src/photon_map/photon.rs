@@ -199,7 +199,11 @@ impl Quantizer {
     /// `max_power` stores every power as 0.
     pub fn new(min: Vec3, max: Vec3, max_power: f32) -> Self {
         let ok = min.is_finite() && max.is_finite() && min.cmple(max).all();
-        let (min, max) = if ok { (min, max) } else { (Vec3::ZERO, Vec3::ZERO) };
+        let (min, max) = if ok {
+            (min, max)
+        } else {
+            (Vec3::ZERO, Vec3::ZERO)
+        };
         let extent = (0..3)
             .map(|a| max[a] as f64 - min[a] as f64)
             .fold(0.0, f64::max);
@@ -372,14 +376,25 @@ mod tests {
     fn invalid_marker_is_never_an_encoding() {
         // Octahedral codes stop at 4094, the marker's are 4095.
         let q = Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0);
-        for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z, Vec3::ONE] {
+        for d in [
+            Vec3::X,
+            -Vec3::X,
+            Vec3::Y,
+            -Vec3::Y,
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::ONE,
+        ] {
             let p = q.encode(&PhotonRecord {
                 position: Vec3::ONE,
                 power: Vec3::ONE,
                 direction: d,
                 depth: 255,
             });
-            assert_ne!(p.dir & 0x00FF_FFFF, CompactPhoton::INVALID.dir & 0x00FF_FFFF);
+            assert_ne!(
+                p.dir & 0x00FF_FFFF,
+                CompactPhoton::INVALID.dir & 0x00FF_FFFF
+            );
             assert_eq!(p.depth(), MAX_DEPTH);
         }
     }

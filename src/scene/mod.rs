@@ -15,6 +15,7 @@ pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
 pub use surface::{SurfacePoint, SurfaceSampler};
 
 use crate::brdf::Brdf;
+use crate::embree::{CommittedScene, Device};
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::Vec3;
@@ -282,6 +283,19 @@ impl Scene {
             return Err(Error::InvalidScene("the scene has no triangle".into()));
         }
         Ok(())
+    }
+
+    /// Hands the geometry to Embree. A hit's `material` is the mesh's material
+    /// index and its `geom_id` the mesh index.
+    ///
+    /// # Errors
+    /// [`Error::Embree`] when Embree rejects the geometry.
+    pub fn commit(&self, device: &Device) -> Result<CommittedScene> {
+        let mut builder = device.scene_builder()?;
+        for m in &self.meshes {
+            builder.add_triangles(&m.positions, &m.indices, m.material as u32)?;
+        }
+        builder.commit()
     }
 
     /// An area-uniform sampler over every triangle of the scene.
