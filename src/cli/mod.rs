@@ -1,6 +1,7 @@
 //! Subcommands, one file each.
 
 pub mod analyze;
+pub mod bench;
 pub mod common;
 pub mod scene;
 pub mod trace;
@@ -23,6 +24,9 @@ pub enum Command {
     Scene(scene::SceneArgs),
     /// Trace photons in one mode and report counts, density statistics and timings.
     Trace(trace::TraceArgs),
+    /// Benchmarks: ray throughput, the paper's Cornell experiments, the speed/accuracy trade.
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -30,5 +34,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Analyze(a) => analyze::run(a),
         Command::Scene(a) => scene::run(a),
         Command::Trace(a) => trace::run(a),
+        Command::Bench(c) => bench::run(c),
     }
 }

@@ -1,0 +1,25 @@
+//! `adaptive-pm bench ...`: measurements, one file per benchmark.
+
+pub mod cornell;
+pub mod rays;
+pub mod tradeoff;
+
+use clap::Subcommand;
+
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// Closest-hit throughput on incoherent rays: raw Embree, the safe wrapper, batches.
+    Rays(rays::RaysArgs),
+    /// The paper's experiments on the Cornell box (Figs. 7a, 7b, 8, 9a, 9b).
+    Cornell(cornell::CornellArgs),
+    /// Error against a converged reference versus time, per mode and quality.
+    Tradeoff(tradeoff::TradeoffArgs),
+}
+
+pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
+    match cmd {
+        BenchCommand::Rays(a) => rays::run(a),
+        BenchCommand::Cornell(a) => cornell::run(a),
+        BenchCommand::Tradeoff(a) => tradeoff::run(a),
+    }
+}

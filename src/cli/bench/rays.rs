@@ -1,0 +1,72 @@
+//! `adaptive-pm bench rays <SCENE>`: closest-hit throughput on incoherent rays
+//! (origins area-uniform on the surfaces, cosine-distributed directions), three
+//! ways in one run: raw embree-sys calls, the safe wrapper one ray at a time,
+//! and the wrapper in batches; on one thread and on all threads.
+
+use adaptive_pm::embree::{measure_throughput, Device, Throughput};
+use adaptive_pm::scene::Scene;
+use serde_json::json;
+
+/// Arguments of `bench rays`.
+#[derive(clap::Args, Debug)]
+pub struct RaysArgs {
+    /// A glTF file, or `cornell`.
+    pub scene: String,
+    /// Rays per pass.
+    #[arg(long, default_value_t = 2_000_000)]
+    pub rays: usize,
+    /// Seed of the rays.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn row(t: &Throughput) -> serde_json::Value {
+    json!({
+        "threads": t.threads,
+        "raw_mrays_per_s": t.raw_mrays_per_s,
+        "single_mrays_per_s": t.single_mrays_per_s,
+        "batch_mrays_per_s": t.batch_mrays_per_s,
+    })
+}
+
+pub fn run(args: RaysArgs) -> anyhow::Result<()> {
+    if args.rays == 0 {
+        anyhow::bail!("--rays must be at least 1");
+    }
+    let scene = Scene::open(&args.scene)?;
+    let device = Device::new()?;
+    let rt = scene.commit(&device)?;
+    let (lo, hi) = scene.bounds();
+    let eps = 1e-5 * (hi - lo).length();
+    let rays = scene.surface_sampler().incoherent_rays(args.rays, args.seed, eps);
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let one = measure_throughput(&rt, &rays, 1)?;
+    let many = measure_throughput(&rt, &rays, all)?;
+    if args.json {
+        let mut v = row(&many);
+        v["scene"] = json!(args.scene);
+        v["rays"] = json!(rays.len());
+        v["one_thread"] = row(&one);
+        v["embree_version"] = json!(format!("{:?}", device.version()));
+        println!("{v}");
+        return Ok(());
+    }
+    let (a, b, c) = device.version();
+    println!("{} rays on {} (Embree {a}.{b}.{c}), best of {} passes", rays.len(), args.scene, adaptive_pm::embree::throughput::REPETITIONS);
+    println!("{:>8} {:>12} {:>12} {:>12} {:>10} {:>10}", "threads", "raw Mray/s", "single", "batch", "single/raw", "batch/raw");
+    for t in [&one, &many] {
+        println!(
+            "{:>8} {:>12.2} {:>12.2} {:>12.2} {:>10.3} {:>10.3}",
+            t.threads,
+            t.raw_mrays_per_s,
+            t.single_mrays_per_s,
+            t.batch_mrays_per_s,
+            t.single_mrays_per_s / t.raw_mrays_per_s,
+            t.batch_mrays_per_s / t.raw_mrays_per_s
+        );
+    }
+    Ok(())
+}
