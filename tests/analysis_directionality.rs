@@ -22,12 +22,22 @@ fn diffuse_functions_give_exactly_one() {
     assert_eq!(e.alpha_d, 1.0);
     let l: Brdf = Lambert::new(Vec3::new(0.7, 0.5, 0.3)).unwrap().into();
     for c in [1.0f32, 0.5, 0.05] {
-        assert_eq!(analyze_brdf_at(&l, c, Estimator::Paper, &p).unwrap().alpha_d, 1.0);
+        assert_eq!(
+            analyze_brdf_at(&l, c, Estimator::Paper, &p)
+                .unwrap()
+                .alpha_d,
+            1.0
+        );
         // f32 rounding of luminance(albedo / pi) against luminance(albedo) / pi
-        let a = analyze_brdf_at(&l, c, Estimator::PeakDensity, &p).unwrap().alpha_d;
+        let a = analyze_brdf_at(&l, c, Estimator::PeakDensity, &p)
+            .unwrap()
+            .alpha_d;
         assert!((1.0 - a) < 1e-6, "{a}");
     }
-    assert_eq!(analyze_brdf(&l, Estimator::Paper, &p).unwrap().alpha_d(0.3), 1.0);
+    assert_eq!(
+        analyze_brdf(&l, Estimator::Paper, &p).unwrap().alpha_d(0.3),
+        1.0
+    );
 }
 
 #[test]
@@ -38,7 +48,11 @@ fn cosn_variance_matches_closed_form_below_the_threshold() {
     let p = AnalysisParams::default();
     let d = analyze_emitter(&CosN::new(1.0).unwrap(), Estimator::Paper, &p).unwrap();
     let want = variance_cosn(1.0);
-    assert!((d.variance - want).abs() < 0.1 * want, "{} vs {want}", d.variance);
+    assert!(
+        (d.variance - want).abs() < 0.1 * want,
+        "{} vs {want}",
+        d.variance
+    );
     assert_eq!(d.alpha_d, 1.0, "cos^1 is below 0.015: diffuse");
 }
 
@@ -47,26 +61,40 @@ fn cosn_alpha_falls_with_n() {
     // Non-increasing over a grid of n, with a slack of the seed-to-seed
     // spread: each alpha is the mean over 4 seeds, and a rise is allowed only
     // within 3 standard errors of the two means.
-    let ns = [0.0f32, 1.0, 2.0, 3.0, 5.0, 8.0, 12.0, 20.0, 35.0, 50.0, 80.0, 120.0, 160.0, 200.0];
+    let ns = [
+        0.0f32, 1.0, 2.0, 3.0, 5.0, 8.0, 12.0, 20.0, 35.0, 50.0, 80.0, 120.0, 160.0, 200.0,
+    ];
     let mut prev: Option<(f32, f32)> = None;
     for n in ns {
         let a: Vec<f32> = (0..4)
             .map(|s| {
-                let p = AnalysisParams { seed: s, ..Default::default() };
-                analyze_emitter(&CosN::new(n).unwrap(), Estimator::Paper, &p).unwrap().alpha_d
+                let p = AnalysisParams {
+                    seed: s,
+                    ..Default::default()
+                };
+                analyze_emitter(&CosN::new(n).unwrap(), Estimator::Paper, &p)
+                    .unwrap()
+                    .alpha_d
             })
             .collect();
         let m = a.iter().sum::<f32>() / 4.0;
         let se = (a.iter().map(|x| (x - m).powi(2)).sum::<f32>() / 12.0).sqrt() / 2.0;
         if let Some((pm, pse)) = prev {
-            assert!(m <= pm + 3.0 * (se * se + pse * pse).sqrt(), "n={n}: {m} > {pm}");
+            assert!(
+                m <= pm + 3.0 * (se * se + pse * pse).sqrt(),
+                "n={n}: {m} > {pm}"
+            );
         }
         prev = Some((m, se));
     }
     assert!(prev.unwrap().0 < 0.05, "alpha(200) = {}", prev.unwrap().0);
     for n in ns {
-        let b = analyze_emitter(&CosN::new(n).unwrap(), Estimator::PeakDensity, &AnalysisParams::default())
-            .unwrap();
+        let b = analyze_emitter(
+            &CosN::new(n).unwrap(),
+            Estimator::PeakDensity,
+            &AnalysisParams::default(),
+        )
+        .unwrap();
         assert!((b.alpha_d - 2.0 / (n + 2.0)).abs() < 1e-6);
     }
 }
@@ -84,7 +112,10 @@ fn phong_alpha_falls_with_the_exponent_and_mirror_is_the_floor() {
         }
         assert!(prev < 0.01);
         let m: Brdf = Mirror::new(Vec3::ONE).unwrap().into();
-        assert_eq!(analyze_brdf_at(&m, 0.5, est, &p).unwrap().alpha_d, p.alpha_min);
+        assert_eq!(
+            analyze_brdf_at(&m, 0.5, est, &p).unwrap().alpha_d,
+            p.alpha_min
+        );
         let t = analyze_brdf(&m, est, &p).unwrap();
         assert_eq!(t.alpha_d(0.5), p.alpha_min);
         assert_eq!(t.alpha_d(1.0), p.alpha_min);
@@ -142,9 +173,15 @@ fn extremes_are_finite_and_documented() {
     let p = AnalysisParams::default();
     let models: Vec<Brdf> = vec![
         Phong::new(Vec3::ZERO, Vec3::ONE, 1e6).unwrap().into(),
-        Phong::new(Vec3::splat(0.5), Vec3::splat(0.5), 0.0).unwrap().into(),
-        CookTorrance::new(1e-4, Vec3::ONE, Vec3::ZERO).unwrap().into(),
-        CookTorrance::new(1.0, Vec3::splat(0.04), Vec3::ONE).unwrap().into(),
+        Phong::new(Vec3::splat(0.5), Vec3::splat(0.5), 0.0)
+            .unwrap()
+            .into(),
+        CookTorrance::new(1e-4, Vec3::ONE, Vec3::ZERO)
+            .unwrap()
+            .into(),
+        CookTorrance::new(1.0, Vec3::splat(0.04), Vec3::ONE)
+            .unwrap()
+            .into(),
     ];
     for est in BOTH {
         for b in &models {
@@ -156,7 +193,10 @@ fn extremes_are_finite_and_documented() {
         // all-zero function (albedo 0) and the horizon: diffuse, by the docs
         let black: Brdf = Phong::new(Vec3::ZERO, Vec3::ZERO, 10.0).unwrap().into();
         assert_eq!(analyze_brdf_at(&black, 0.5, est, &p).unwrap().alpha_d, 1.0);
-        assert_eq!(analyze_brdf_at(&models[0], 0.0, est, &p).unwrap().alpha_d, 1.0);
+        assert_eq!(
+            analyze_brdf_at(&models[0], 0.0, est, &p).unwrap().alpha_d,
+            1.0
+        );
         let e = analyze_emitter(&CosN::new(1e6).unwrap(), est, &p).unwrap();
         assert_eq!(e.alpha_d, p.alpha_min);
     }
@@ -166,11 +206,23 @@ fn extremes_are_finite_and_documented() {
     assert!(CosN::new(f32::NAN).is_err() && CosN::new(-1.0).is_err());
     for bad in [
         AnalysisParams { samples: 0, ..p },
-        AnalysisParams { alpha_min: 0.0, ..p },
-        AnalysisParams { variance_threshold: f32::NAN, ..p },
-        AnalysisParams { min_peak_fraction: 1.5, ..p },
+        AnalysisParams {
+            alpha_min: 0.0,
+            ..p
+        },
+        AnalysisParams {
+            variance_threshold: f32::NAN,
+            ..p
+        },
+        AnalysisParams {
+            min_peak_fraction: 1.5,
+            ..p
+        },
         AnalysisParams { grid_phi: 0, ..p },
-        AnalysisParams { theta_in_bins: 1, ..p },
+        AnalysisParams {
+            theta_in_bins: 1,
+            ..p
+        },
     ] {
         assert!(analyze_emitter(&CosN::new(5.0).unwrap(), Estimator::Paper, &bad).is_err());
     }
@@ -179,7 +231,9 @@ fn extremes_are_finite_and_documented() {
 #[test]
 fn table_interpolates_direct_analyses_and_cache_runs_each_once() {
     let p = AnalysisParams::default();
-    let b: Brdf = Phong::new(Vec3::splat(0.1), Vec3::splat(0.8), 30.0).unwrap().into();
+    let b: Brdf = Phong::new(Vec3::splat(0.1), Vec3::splat(0.8), 30.0)
+        .unwrap()
+        .into();
     let t = analyze_brdf(&b, Estimator::PeakDensity, &p).unwrap();
     assert_eq!(t.len(), p.theta_in_bins);
     assert!(t.size_bytes() <= 256);
@@ -187,14 +241,18 @@ fn table_interpolates_direct_analyses_and_cache_runs_each_once() {
     // (relative step ln(1/alpha_min)/65535 ~ 1.1e-4).
     for k in [0usize, 7, 20] {
         let th = adaptive_pm::analysis::DirectionalityTable::node_theta(k, p.theta_in_bins);
-        let direct = analyze_brdf_at(&b, th.cos(), Estimator::PeakDensity, &p).unwrap().alpha_d;
+        let direct = analyze_brdf_at(&b, th.cos(), Estimator::PeakDensity, &p)
+            .unwrap()
+            .alpha_d;
         assert!((t.alpha_d(th.cos()) - direct).abs() <= 2e-4 * direct, "{k}");
     }
     for c in [f32::NAN, -1.0, 2.0, 0.0, 1.0] {
         assert!(t.alpha_d(c).is_finite());
     }
     let mut cache = AnalysisCache::new(p, Estimator::Paper).unwrap();
-    let same: Brdf = Phong::new(Vec3::splat(0.1), Vec3::splat(0.8), 30.0).unwrap().into();
+    let same: Brdf = Phong::new(Vec3::splat(0.1), Vec3::splat(0.8), 30.0)
+        .unwrap()
+        .into();
     let t1 = cache.brdf(&b).unwrap();
     let t2 = cache.brdf(&same).unwrap();
     assert!(std::sync::Arc::ptr_eq(&t1, &t2));

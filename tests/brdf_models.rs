@@ -14,13 +14,44 @@ fn wi_at(cos: f32) -> Vec3 {
 
 fn glossy_models() -> Vec<(&'static str, Brdf)> {
     vec![
-        ("lambert", Lambert::new(Vec3::new(0.8, 0.5, 0.2)).unwrap().into()),
-        ("phong e=1", Phong::new(Vec3::splat(0.3), Vec3::splat(0.6), 1.0).unwrap().into()),
-        ("phong e=20", Phong::new(Vec3::splat(0.2), Vec3::splat(0.7), 20.0).unwrap().into()),
-        ("phong spec e=5", Phong::new(Vec3::ZERO, Vec3::splat(0.9), 5.0).unwrap().into()),
-        ("ct m=0.2 metal", CookTorrance::new(0.2, Vec3::splat(0.9), Vec3::ZERO).unwrap().into()),
-        ("ct m=0.5 dielectric", CookTorrance::new(0.5, Vec3::splat(0.04), Vec3::splat(0.8)).unwrap().into()),
-        ("gltf", from_gltf_pbr(Vec3::new(0.9, 0.6, 0.3), 0.5, 0.6).unwrap()),
+        (
+            "lambert",
+            Lambert::new(Vec3::new(0.8, 0.5, 0.2)).unwrap().into(),
+        ),
+        (
+            "phong e=1",
+            Phong::new(Vec3::splat(0.3), Vec3::splat(0.6), 1.0)
+                .unwrap()
+                .into(),
+        ),
+        (
+            "phong e=20",
+            Phong::new(Vec3::splat(0.2), Vec3::splat(0.7), 20.0)
+                .unwrap()
+                .into(),
+        ),
+        (
+            "phong spec e=5",
+            Phong::new(Vec3::ZERO, Vec3::splat(0.9), 5.0)
+                .unwrap()
+                .into(),
+        ),
+        (
+            "ct m=0.2 metal",
+            CookTorrance::new(0.2, Vec3::splat(0.9), Vec3::ZERO)
+                .unwrap()
+                .into(),
+        ),
+        (
+            "ct m=0.5 dielectric",
+            CookTorrance::new(0.5, Vec3::splat(0.04), Vec3::splat(0.8))
+                .unwrap()
+                .into(),
+        ),
+        (
+            "gltf",
+            from_gltf_pbr(Vec3::new(0.9, 0.6, 0.3), 0.5, 0.6).unwrap(),
+        ),
     ]
 }
 
@@ -82,7 +113,9 @@ fn chi2(b: &Brdf, wi: Vec3, seed: u64) -> (f64, f64) {
     let (mut stat, mut dof, mut pe, mut po) = (0.0, 0usize, 0.0, 0.0);
     if std::env::var("CHI2_DEBUG").is_ok() {
         for i in 0..KC {
-            let (e, o): (f64, f64) = (0..KP).fold((0.0, 0.0), |a, j| (a.0 + expected[i * KP + j], a.1 + observed[i * KP + j]));
+            let (e, o): (f64, f64) = (0..KP).fold((0.0, 0.0), |a, j| {
+                (a.0 + expected[i * KP + j], a.1 + observed[i * KP + j])
+            });
             eprintln!("band {i}: e={e:.1} o={o}");
         }
         eprintln!("fail: e={:.1} o={}", expected[KC * KP], observed[KC * KP]);
@@ -110,7 +143,10 @@ fn samplers_match_their_pdfs() {
     for (name, b) in glossy_models() {
         for (k, cos) in [1.0f32, 0.7, 0.3, 0.05].into_iter().enumerate() {
             let (stat, limit) = chi2(&b, wi_at(cos), 100 + k as u64);
-            assert!(stat < limit, "{name} cos_i={cos}: chi2 {stat:.1} > {limit:.1}");
+            assert!(
+                stat < limit,
+                "{name} cos_i={cos}: chi2 {stat:.1} > {limit:.1}"
+            );
         }
     }
 }
@@ -142,13 +178,46 @@ fn mc_albedo(b: &Brdf, wi: Vec3, n: usize, seed: u64) -> (f64, f64) {
 fn energy_is_conserved_and_albedo_matches_monte_carlo() {
     let worst: Vec<(&str, Brdf)> = vec![
         ("lambert 1", Lambert::new(Vec3::ONE).unwrap().into()),
-        ("phong 0.5+0.5 e=1", Phong::new(Vec3::splat(0.5), Vec3::splat(0.5), 1.0).unwrap().into()),
-        ("phong 0+1 e=50", Phong::new(Vec3::ZERO, Vec3::ONE, 50.0).unwrap().into()),
-        ("ct f0=1 m=0.05", CookTorrance::new(0.05, Vec3::ONE, Vec3::ZERO).unwrap().into()),
-        ("ct f0=1 m=1", CookTorrance::new(1.0, Vec3::ONE, Vec3::ZERO).unwrap().into()),
-        ("ct kd=1 f0=.04 m=.3", CookTorrance::new(0.3, Vec3::splat(0.04), Vec3::ONE).unwrap().into()),
-        ("ct kd=1 f0=.04 m=1", CookTorrance::new(1.0, Vec3::splat(0.04), Vec3::ONE).unwrap().into()),
-        ("ct kd=1 f0=.5 m=.1", CookTorrance::new(0.1, Vec3::splat(0.5), Vec3::ONE).unwrap().into()),
+        (
+            "phong 0.5+0.5 e=1",
+            Phong::new(Vec3::splat(0.5), Vec3::splat(0.5), 1.0)
+                .unwrap()
+                .into(),
+        ),
+        (
+            "phong 0+1 e=50",
+            Phong::new(Vec3::ZERO, Vec3::ONE, 50.0).unwrap().into(),
+        ),
+        (
+            "ct f0=1 m=0.05",
+            CookTorrance::new(0.05, Vec3::ONE, Vec3::ZERO)
+                .unwrap()
+                .into(),
+        ),
+        (
+            "ct f0=1 m=1",
+            CookTorrance::new(1.0, Vec3::ONE, Vec3::ZERO)
+                .unwrap()
+                .into(),
+        ),
+        (
+            "ct kd=1 f0=.04 m=.3",
+            CookTorrance::new(0.3, Vec3::splat(0.04), Vec3::ONE)
+                .unwrap()
+                .into(),
+        ),
+        (
+            "ct kd=1 f0=.04 m=1",
+            CookTorrance::new(1.0, Vec3::splat(0.04), Vec3::ONE)
+                .unwrap()
+                .into(),
+        ),
+        (
+            "ct kd=1 f0=.5 m=.1",
+            CookTorrance::new(0.1, Vec3::splat(0.5), Vec3::ONE)
+                .unwrap()
+                .into(),
+        ),
     ];
     for (name, b) in worst {
         for (k, cos) in [1.0f32, 0.8, 0.5, 0.2, 0.05, 0.01].into_iter().enumerate() {
@@ -157,7 +226,10 @@ fn energy_is_conserved_and_albedo_matches_monte_carlo() {
             let a = adaptive_pm::sampling::luminance(b.albedo(wi)) as f64;
             // 5 standard errors of the estimate; the quadratures in albedo()
             // get a further 0.01 (their resolution, 16 x 16 or 64 points).
-            assert!(m <= 1.0 + 5.0 * se + 1e-6, "{name} cos={cos}: MC albedo {m} > 1");
+            assert!(
+                m <= 1.0 + 5.0 * se + 1e-6,
+                "{name} cos={cos}: MC albedo {m} > 1"
+            );
             assert!(a <= 1.0 + 1e-3, "{name} cos={cos}: albedo() {a} > 1");
             assert!(
                 (a - m).abs() <= 5.0 * se + 0.01,
@@ -211,10 +283,16 @@ fn mirror_is_a_delta() {
 #[test]
 fn extremes_stay_finite() {
     let models: Vec<Brdf> = vec![
-        Phong::new(Vec3::splat(0.5), Vec3::splat(0.5), 0.0).unwrap().into(),
+        Phong::new(Vec3::splat(0.5), Vec3::splat(0.5), 0.0)
+            .unwrap()
+            .into(),
         Phong::new(Vec3::ZERO, Vec3::ONE, 1e6).unwrap().into(),
-        CookTorrance::new(1e-4, Vec3::ONE, Vec3::ZERO).unwrap().into(),
-        CookTorrance::new(1.0, Vec3::splat(0.04), Vec3::ONE).unwrap().into(),
+        CookTorrance::new(1e-4, Vec3::ONE, Vec3::ZERO)
+            .unwrap()
+            .into(),
+        CookTorrance::new(1.0, Vec3::splat(0.04), Vec3::ONE)
+            .unwrap()
+            .into(),
         Lambert::new(Vec3::ZERO).unwrap().into(),
         Phong::new(Vec3::ZERO, Vec3::ZERO, 10.0).unwrap().into(),
     ];
@@ -223,7 +301,10 @@ fn extremes_stay_finite() {
         for cos in [1.0f32, 0.5, 1e-3, 1e-6, 0.0] {
             let wi = wi_at(cos);
             let a = b.albedo(wi);
-            assert!(a.is_finite() && a.max_element() <= 1.0 + 1e-3, "{b:?} {cos}: {a}");
+            assert!(
+                a.is_finite() && a.max_element() <= 1.0 + 1e-3,
+                "{b:?} {cos}: {a}"
+            );
             for _ in 0..500 {
                 if let Some(s) = b.sample(wi, r.next_2d()) {
                     assert!(s.wo.is_finite() && s.weight.is_finite() && s.pdf.is_finite());
@@ -258,9 +339,15 @@ fn bad_parameters_are_errors() {
 
 #[test]
 fn keys_separate_parameters() {
-    let a: Brdf = Phong::new(Vec3::splat(0.2), Vec3::splat(0.7), 20.0).unwrap().into();
-    let b: Brdf = Phong::new(Vec3::splat(0.2), Vec3::splat(0.7), 21.0).unwrap().into();
-    let c: Brdf = Phong::new(Vec3::splat(0.2), Vec3::splat(0.7), 20.0).unwrap().into();
+    let a: Brdf = Phong::new(Vec3::splat(0.2), Vec3::splat(0.7), 20.0)
+        .unwrap()
+        .into();
+    let b: Brdf = Phong::new(Vec3::splat(0.2), Vec3::splat(0.7), 21.0)
+        .unwrap()
+        .into();
+    let c: Brdf = Phong::new(Vec3::splat(0.2), Vec3::splat(0.7), 20.0)
+        .unwrap()
+        .into();
     let d: Brdf = Lambert::new(Vec3::splat(0.2)).unwrap().into();
     assert_eq!(a.key(), c.key());
     assert_ne!(a.key(), b.key());

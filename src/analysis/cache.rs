@@ -54,7 +54,10 @@ impl AnalysisCache {
     /// # Errors
     /// Whatever [`analyze_emitter`] returns (nothing is cached then).
     pub fn emitter(&mut self, e: &CosN) -> Result<f32> {
-        let key = hash2(hash2(0xE, e.exponent().to_bits() as u64), self.estimator as u64);
+        let key = hash2(
+            hash2(0xE, e.exponent().to_bits() as u64),
+            self.estimator as u64,
+        );
         if let Some(&a) = self.emitters.get(&key) {
             return Ok(a);
         }

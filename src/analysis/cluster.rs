@@ -171,9 +171,10 @@ mod tests {
                         .map(|&i| dirs[i as usize].dot(dirs[k as usize]))
                         .fold(f32::INFINITY, f32::min)
                 };
-                let Some(&b) = left.iter().max_by(|&&a, &&b| {
-                    link(a).total_cmp(&link(b)).then(b.cmp(&a))
-                }) else {
+                let Some(&b) = left
+                    .iter()
+                    .max_by(|&&a, &&b| link(a).total_cmp(&link(b)).then(b.cmp(&a)))
+                else {
                     break;
                 };
                 let vals: Vec<f64> = g

@@ -159,7 +159,7 @@ impl CookTorrance {
             return None;
         }
         let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         let weight = self.eval(wi, wo) * wo.z / pdf;
@@ -197,8 +197,8 @@ impl CookTorrance {
         if wi.z <= 0.0 {
             return Vec3::ZERO;
         }
-        let diffuse = self.kd * (Vec3::ONE - schlick(self.f0, wi.z)) * (Vec3::ONE - self.f0)
-            * (20.0 / 21.0);
+        let diffuse =
+            self.kd * (Vec3::ONE - schlick(self.f0, wi.z)) * (Vec3::ONE - self.f0) * (20.0 / 21.0);
         const N: usize = 16;
         let mut spec = Vec3::ZERO;
         for a in 0..N {

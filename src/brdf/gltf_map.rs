@@ -33,7 +33,10 @@ use glam::Vec3;
 /// `roughness` is NaN or outside [0, 1].
 pub fn from_gltf_pbr(base_color: Vec3, metallic: f32, roughness: f32) -> Result<Brdf> {
     let base_color = super::phong::check_rgb01("gltf baseColorFactor", base_color)?;
-    for (name, v) in [("gltf metallicFactor", metallic), ("gltf roughnessFactor", roughness)] {
+    for (name, v) in [
+        ("gltf metallicFactor", metallic),
+        ("gltf roughnessFactor", roughness),
+    ] {
         if !(0.0..=1.0).contains(&v) {
             return Err(Error::param(name, format!("must be in [0, 1], got {v}")));
         }
@@ -59,8 +62,14 @@ mod tests {
         let c = Vec3::new(0.8, 0.5, 0.2);
         assert!(matches!(from_gltf_pbr(c, 1.0, 0.0), Ok(Brdf::Mirror(_))));
         assert!(matches!(from_gltf_pbr(c, 0.0, 1.0), Ok(Brdf::Lambert(_))));
-        assert!(matches!(from_gltf_pbr(c, 0.5, 0.5), Ok(Brdf::CookTorrance(_))));
-        assert!(matches!(from_gltf_pbr(c, 0.0, 0.0), Ok(Brdf::CookTorrance(_))));
+        assert!(matches!(
+            from_gltf_pbr(c, 0.5, 0.5),
+            Ok(Brdf::CookTorrance(_))
+        ));
+        assert!(matches!(
+            from_gltf_pbr(c, 0.0, 0.0),
+            Ok(Brdf::CookTorrance(_))
+        ));
         assert!(from_gltf_pbr(c, f32::NAN, 0.5).is_err());
         assert!(from_gltf_pbr(c, 0.5, 1.5).is_err());
         assert!(from_gltf_pbr(Vec3::splat(-1.0), 0.5, 0.5).is_err());

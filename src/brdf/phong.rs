@@ -64,7 +64,10 @@ impl Phong {
         if (kd + ks).max_element() > 1.0 + 1e-6 {
             return Err(Error::param(
                 "phong kd + ks",
-                format!("must be <= 1 per channel for energy conservation, got {}", kd + ks),
+                format!(
+                    "must be <= 1 per channel for energy conservation, got {}",
+                    kd + ks
+                ),
             ));
         }
         let (ld, ls) = (luminance(kd), luminance(ks));
@@ -127,7 +130,7 @@ impl Phong {
             return None;
         }
         let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         let weight = self.eval(wi, wo) * wo.z / pdf;
@@ -201,7 +204,10 @@ mod tests {
             let mut prev = a0;
             for c in [0.8, 0.5, 0.2, 0.01] {
                 let a = lobe_albedo(e, c);
-                assert!(a <= prev + 1e-4 && a.is_finite(), "e={e} c={c}: {a} > {prev}");
+                assert!(
+                    a <= prev + 1e-4 && a.is_finite(),
+                    "e={e} c={c}: {a} > {prev}"
+                );
                 prev = a;
             }
         }
