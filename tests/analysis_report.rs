@@ -66,26 +66,63 @@ fn report_cosn_sweep() {
 
 #[test]
 #[ignore]
-fn debug_peaks() {
-    let p = AnalysisParams::default();
-    for n in [200.0f32, 1000.0] {
-        let a = analyze_emitter(&CosN::new(n).unwrap(), Estimator::Paper, &p).unwrap();
-        println!("{n}: {:?}", a.peaks);
-        let set = adaptive_pm::analysis::sampling::sample(
-            adaptive_pm::analysis::sampling::Target::CosN(n),
-            &p,
-        );
-        let groups = adaptive_pm::analysis::cluster::cluster(&set.dirs, &set.values, 0.0);
-        println!("dirs {} groups(limit 0) {}", set.dirs.len(), groups.len());
-        let mut v = set.values.clone();
-        v.sort_by(f32::total_cmp);
-        println!(
-            "min {} max {} above {}",
-            v[0],
-            v[v.len() - 1],
-            v.iter()
-                .filter(|&&x| x > 1.0 / (2.0 * std::f32::consts::PI))
-                .count()
-        );
+fn report_convergence() {
+    // alpha_D mean and seed spread (8 seeds) when samples and strata double.
+    let fns: Vec<(&str, Option<Brdf>, f32)> = vec![
+        ("cosn 10", None, 10.0),
+        ("cosn 100", None, 100.0),
+        (
+            "phong 100",
+            Some(
+                Phong::new(Vec3::ZERO, Vec3::splat(0.9), 100.0)
+                    .unwrap()
+                    .into(),
+            ),
+            0.0,
+        ),
+        (
+            "ct 0.3",
+            Some(
+                CookTorrance::new(0.3, Vec3::splat(0.9), Vec3::ZERO)
+                    .unwrap()
+                    .into(),
+            ),
+            0.0,
+        ),
+    ];
+    for (name, b, n) in fns {
+        for (s, gc, gp) in [
+            (256usize, 16usize, 16usize),
+            (512, 16, 32),
+            (1024, 32, 32),
+            (2048, 32, 64),
+        ] {
+            let a: Vec<f32> = (0..8u64)
+                .map(|seed| {
+                    let p = AnalysisParams {
+                        samples: s,
+                        grid_cos_theta: gc,
+                        grid_phi: gp,
+                        seed,
+                        ..Default::default()
+                    };
+                    match &b {
+                        Some(b) => {
+                            analyze_brdf_at(b, 0.75f32.sqrt(), Estimator::Paper, &p)
+                                .unwrap()
+                                .alpha_d
+                        }
+                        None => {
+                            analyze_emitter(&CosN::new(n).unwrap(), Estimator::Paper, &p)
+                                .unwrap()
+                                .alpha_d
+                        }
+                    }
+                })
+                .collect();
+            let m = a.iter().sum::<f32>() / 8.0;
+            let sd = (a.iter().map(|x| (x - m).powi(2)).sum::<f32>() / 7.0).sqrt();
+            println!("{name} N={s} grid={gc}x{gp}: mean {m:.4} sd {sd:.4}");
+        }
     }
 }

@@ -170,7 +170,7 @@ fn paper(set: &SampleSet, sample_time: Duration, p: &AnalysisParams) -> Directio
 
 /// `alpha_D = 1 / (pi max p)` clamped to [`alpha_min`, 1].
 fn peak_alpha(max_p: f64, p: &AnalysisParams) -> f32 {
-    if !(max_p > 0.0) {
+    if max_p.is_nan() || max_p <= 0.0 {
         return 1.0;
     }
     ((1.0 / (std::f64::consts::PI * max_p)) as f32).clamp(p.alpha_min, 1.0)

@@ -181,7 +181,7 @@ pub fn sample(target: Target<'_>, p: &AnalysisParams) -> SampleSet {
         }
     };
 
-    if !(integral > 0.0) || !integral.is_finite() {
+    if integral.is_nan() || integral <= 0.0 || !integral.is_finite() {
         // All-zero function: reported diffuse by the caller.
         return SampleSet {
             drawn: n,

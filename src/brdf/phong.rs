@@ -130,7 +130,7 @@ impl Phong {
             return None;
         }
         let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         let weight = self.eval(wi, wo) * wo.z / pdf;

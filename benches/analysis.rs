@@ -1,0 +1,59 @@
+//! Directionality analysis timings: step 1 (sampling) and steps 3-4
+//! (clustering + solid angles) separately, per function, plus whole BRDF
+//! tables. Targets: one analysis < 1 ms, one table < 20 ms, on one core.
+
+use adaptive_pm::analysis::sampling::{sample, Target};
+use adaptive_pm::analysis::{analyze_brdf, find_peaks, AnalysisParams, Estimator};
+use adaptive_pm::brdf::{Brdf, CookTorrance, Phong};
+use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
+use glam::Vec3;
+
+type Named = (&'static str, Option<Brdf>, f32);
+
+fn functions() -> Vec<Named> {
+    let phong = Phong::new(Vec3::ZERO, Vec3::splat(0.9), 100.0).unwrap();
+    let ct = |m| CookTorrance::new(m, Vec3::splat(0.9), Vec3::ZERO).unwrap();
+    vec![
+        ("cosn10", None, 10.0),
+        ("cosn100", None, 100.0),
+        ("phong100", Some(phong.into()), 0.0),
+        ("ct0.3", Some(ct(0.3).into()), 0.0),
+        ("ct0.05", Some(ct(0.05).into()), 0.0),
+    ]
+}
+
+fn bench(c: &mut Criterion) {
+    let p = AnalysisParams::default();
+    let wi = Vec3::new(0.5, 0.0, 0.75f32.sqrt());
+    let mut g = c.benchmark_group("analysis");
+    g.throughput(Throughput::Elements(p.samples as u64));
+    for (name, b, n) in functions() {
+        fn target(b: &Option<Brdf>, wi: Vec3, n: f32) -> Target<'_> {
+            match b {
+                Some(b) => Target::Brdf(b, wi),
+                None => Target::CosN(n),
+            }
+        }
+        g.bench_function(format!("sample/{name}"), |bn| {
+            bn.iter(|| sample(black_box(target(&b, wi, n)), &p))
+        });
+        let set = sample(target(&b, wi, n), &p);
+        g.bench_function(format!("cluster/{name}"), |bn| {
+            bn.iter(|| find_peaks(black_box(&set.dirs), &set.values, set.drawn, &p))
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("table");
+    g.sample_size(10);
+    for (name, b, _) in functions() {
+        if let Some(b) = b {
+            g.bench_function(format!("paper/{name}"), |bn| {
+                bn.iter(|| analyze_brdf(black_box(&b), Estimator::Paper, &p))
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
