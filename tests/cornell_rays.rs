@@ -12,16 +12,24 @@ fn a_ray_down_from_the_light_centre_hits_the_floor_below() {
     let device = Device::new().unwrap();
     let rt = scene.commit(&device).unwrap();
     let centre = Vec3::new(278.0, 548.0, 279.5);
-    let hit = rt.intersect(&Ray::new(centre, -Vec3::Y)).expect("the floor is below");
+    let hit = rt
+        .intersect(&Ray::new(centre, -Vec3::Y))
+        .expect("the floor is below");
     let p = centre - Vec3::Y * hit.t;
     assert!((p - Vec3::new(278.0, 0.0, 279.5)).length() < 1e-3, "{p}");
     assert!((hit.t - 548.0).abs() < 1e-3);
     assert!(hit.ng.y.abs() > 0.9999);
-    let floor = scene.meshes.iter().position(|m| m.name.starts_with("floor")).unwrap();
+    let floor = scene
+        .meshes
+        .iter()
+        .position(|m| m.name.starts_with("floor"))
+        .unwrap();
     assert_eq!(hit.geom_id as usize, floor);
     assert_eq!(hit.material as usize, scene.meshes[floor].material);
     // upwards from the floor, the first thing is the light (0.1 below the ceiling)
-    let up = rt.intersect(&Ray::new(Vec3::new(278.0, 1.0, 279.5), Vec3::Y)).unwrap();
+    let up = rt
+        .intersect(&Ray::new(Vec3::new(278.0, 1.0, 279.5), Vec3::Y))
+        .unwrap();
     assert!((up.t - 547.7).abs() < 1e-3, "{}", up.t);
     assert!(scene.materials[up.material as usize].emission.is_some());
 }
@@ -31,14 +39,20 @@ fn the_box_closed_by_a_front_wall_traps_every_ray() {
     // The Cornell box is open at the front (z = 0), where the camera looks in.
     // With a front wall added, 1e5 random rays from inside must all hit something.
     let mut scene = Scene::cornell().unwrap();
-    let white = scene.materials.iter().position(|m| m.name == "white").unwrap();
+    let white = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "white")
+        .unwrap();
     let front = vec![
         Vec3::new(-1.0, -1.0, 0.0),
         Vec3::new(560.0, -1.0, 0.0),
         Vec3::new(560.0, 550.0, 0.0),
         Vec3::new(-1.0, 550.0, 0.0),
     ];
-    scene.add_mesh("front", front, vec![[0, 1, 2], [0, 2, 3]], white).unwrap();
+    scene
+        .add_mesh("front", front, vec![[0, 1, 2], [0, 2, 3]], white)
+        .unwrap();
     let device = Device::new().unwrap();
     let rt = scene.commit(&device).unwrap();
     let mut rng = Rng::new(11);
@@ -53,14 +67,28 @@ fn the_box_closed_by_a_front_wall_traps_every_ray() {
         );
         let d = {
             let w = uniform_hemisphere(rng.next_2d());
-            if rng.next_f32() < 0.5 { w } else { -w }
+            if rng.next_f32() < 0.5 {
+                w
+            } else {
+                -w
+            }
         };
         let hit = rt.intersect(&Ray::new(o, d));
         let h = hit.expect("a closed box has no way out");
         assert!(h.t > 0.0 && h.t.is_finite());
         // occlusion agrees with closest hit, at the hit distance and short of it
-        assert!(rt.occluded(&Ray { origin: o, dir: d, tnear: 0.0, tfar: h.t * 1.0001 }));
-        assert!(!rt.occluded(&Ray { origin: o, dir: d, tnear: 0.0, tfar: h.t * 0.999 }));
+        assert!(rt.occluded(&Ray {
+            origin: o,
+            dir: d,
+            tnear: 0.0,
+            tfar: h.t * 1.0001
+        }));
+        assert!(!rt.occluded(&Ray {
+            origin: o,
+            dir: d,
+            tnear: 0.0,
+            tfar: h.t * 0.999
+        }));
         if open_rt.intersect(&Ray::new(o, d)).is_none() {
             escaped_open += 1;
         }

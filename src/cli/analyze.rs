@@ -1,5 +1,5 @@
-//! `adaptive-pm analyze`: directionality of named functions (and, once the
-//! scene module exists, of every function a scene uses).
+//! `adaptive-pm analyze`: directionality of named functions, and of every
+//! emission profile and BRDF a scene uses (each distinct one once).
 //!
 //! Text output: one row per function (kind, param, alpha_d, peaks,
 //! sample_ms, cluster_ms). For BRDFs `alpha_d` and `peaks` are at normal
@@ -12,6 +12,7 @@ use adaptive_pm::analysis::{
 };
 use adaptive_pm::brdf::{Brdf, CookTorrance, Lambert, Mirror, Phong};
 use adaptive_pm::emitter::CosN;
+use adaptive_pm::scene::{Light, Scene};
 use anyhow::{bail, Context};
 use glam::Vec3;
 
@@ -46,6 +47,9 @@ pub struct AnalyzeArgs {
 #[derive(serde::Serialize)]
 struct Row {
     kind: &'static str,
+    /// The scene material or light the function belongs to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    name: Option<String>,
     param: Option<f32>,
     alpha_d: f32,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -73,6 +77,7 @@ fn brdf_row(
     let at0 = analyze_brdf_at(&b, 1.0, est, p)?;
     Ok(Row {
         kind,
+        name: None,
         param,
         alpha_d: t.alpha_d(1.0),
         alpha_d_by_theta_in: Some(t.values()),
@@ -82,21 +87,61 @@ fn brdf_row(
     })
 }
 
+/// Rows for what a scene uses: each distinct emission profile, and each
+/// distinct BRDF that some mesh carries (nothing the scene does not use).
+fn scene_rows(
+    name: &str,
+    est: Estimator,
+    p: &AnalysisParams,
+    rows: &mut Vec<Row>,
+) -> anyhow::Result<()> {
+    let scene = Scene::open(name).with_context(|| format!("scene `{name}`"))?;
+    let mut seen = std::collections::HashSet::new();
+    for l in &scene.lights {
+        if let Light::Area(a) = l {
+            let n = a.emission.profile.exponent();
+            if seen.insert(("cosn", n.to_bits() as u64)) {
+                let d = analyze_emitter(&a.emission.profile, est, p)?;
+                rows.push(Row {
+                    kind: "cosn",
+                    name: Some(scene.meshes[a.mesh].name.clone()),
+                    param: Some(n),
+                    alpha_d: d.alpha_d,
+                    alpha_d_by_theta_in: None,
+                    peaks: d.peaks.len(),
+                    sample_ms: d.sample_time.as_secs_f64() * 1e3,
+                    cluster_ms: d.cluster_time.as_secs_f64() * 1e3,
+                });
+            }
+        }
+    }
+    for mesh in &scene.meshes {
+        let m = &scene.materials[mesh.material];
+        if seen.insert(("brdf", m.brdf.key())) {
+            let mut row = brdf_row(m.brdf.kind(), None, m.brdf, est, p)?;
+            row.name = Some(m.name.clone());
+            rows.push(row);
+        }
+    }
+    Ok(())
+}
+
 /// Runs `analyze`.
 pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
-    if args.scene.is_some() {
-        bail!("scene analysis is not available yet");
-    }
     let est: Estimator = args.directionality.parse()?;
     checked("cosn", &args.cosn)?;
     checked("phong", &args.phong)?;
     checked("cook-torrance", &args.cook_torrance)?;
     let p = AnalysisParams::default();
     let mut rows = Vec::new();
+    if let Some(name) = &args.scene {
+        scene_rows(name, est, &p, &mut rows)?;
+    }
     for &n in &args.cosn {
         let d = analyze_emitter(&CosN::new(n)?, est, &p)?;
         rows.push(Row {
             kind: "cosn",
+            name: None,
             param: Some(n),
             alpha_d: d.alpha_d,
             alpha_d_by_theta_in: None,
@@ -140,14 +185,20 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
         println!("{}", serde_json::json!({ "functions": rows }));
     } else {
         println!(
-            "{:<14} {:>10} {:>9} {:>6} {:>10} {:>11}",
-            "kind", "param", "alpha_d", "peaks", "sample_ms", "cluster_ms"
+            "{:<14} {:<12} {:>10} {:>9} {:>6} {:>10} {:>11}",
+            "kind", "name", "param", "alpha_d", "peaks", "sample_ms", "cluster_ms"
         );
         for r in &rows {
             let param = r.param.map_or("-".to_string(), |v| v.to_string());
             println!(
-                "{:<14} {:>10} {:>9.5} {:>6} {:>10.3} {:>11.3}",
-                r.kind, param, r.alpha_d, r.peaks, r.sample_ms, r.cluster_ms
+                "{:<14} {:<12} {:>10} {:>9.5} {:>6} {:>10.3} {:>11.3}",
+                r.kind,
+                r.name.as_deref().unwrap_or("-"),
+                param,
+                r.alpha_d,
+                r.peaks,
+                r.sample_ms,
+                r.cluster_ms
             );
         }
         println!("(estimator: {est}; BRDFs: alpha_d and peaks at normal incidence, times for the whole theta_in table)");

@@ -7,10 +7,11 @@
 //! - `KHR_lights_punctual` point and spot lights are read; directional lights are
 //!   rejected (they have no position to emit from).
 //! - The first perspective camera found becomes [`Scene::camera`].
+//! - Materials map to BRDFs by [`crate::brdf::from_gltf_pbr`] (metallic-roughness).
 //! - Textures are ignored: only the constant factors are read.
 
 use super::{Camera, Emission, Light, Material, PointLight, Scene, SpotLight};
-use crate::brdf::{Brdf, Lambert};
+use crate::brdf::{from_gltf_pbr, Brdf, Lambert};
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec3};

@@ -41,7 +41,9 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
     let rt = scene.commit(&device)?;
     let (lo, hi) = scene.bounds();
     let eps = 1e-5 * (hi - lo).length();
-    let rays = scene.surface_sampler().incoherent_rays(args.rays, args.seed, eps);
+    let rays = scene
+        .surface_sampler()
+        .incoherent_rays(args.rays, args.seed, eps);
     let all = std::thread::available_parallelism().map_or(1, |n| n.get());
     let one = measure_throughput(&rt, &rays, 1)?;
     let many = measure_throughput(&rt, &rays, all)?;
@@ -55,8 +57,16 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     let (a, b, c) = device.version();
-    println!("{} rays on {} (Embree {a}.{b}.{c}), best of {} passes", rays.len(), args.scene, adaptive_pm::embree::throughput::REPETITIONS);
-    println!("{:>8} {:>12} {:>12} {:>12} {:>10} {:>10}", "threads", "raw Mray/s", "single", "batch", "single/raw", "batch/raw");
+    println!(
+        "{} rays on {} (Embree {a}.{b}.{c}), best of {} passes",
+        rays.len(),
+        args.scene,
+        adaptive_pm::embree::throughput::REPETITIONS
+    );
+    println!(
+        "{:>8} {:>12} {:>12} {:>12} {:>10} {:>10}",
+        "threads", "raw Mray/s", "single", "batch", "single/raw", "batch/raw"
+    );
     for t in [&one, &many] {
         println!(
             "{:>8} {:>12.2} {:>12.2} {:>12.2} {:>10.3} {:>10.3}",
