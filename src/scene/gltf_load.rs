@@ -131,10 +131,8 @@ fn convert_material(m: &gltf::Material) -> Result<Material> {
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let base = Vec3::new(r, g, b);
-    // Until the glTF metallic-roughness mapping lands, every surface is diffuse.
-    let brdf = Brdf::Lambert(Lambert {
-        albedo: base.clamp(Vec3::ZERO, Vec3::ONE),
-    });
+    let brdf = from_gltf_pbr(base, pbr.metallic_factor(), pbr.roughness_factor())
+        .map_err(|e| Error::InvalidScene(format!("material `{}`: {e}", m.name().unwrap_or("?"))))?;
     let strength = m.emissive_strength().unwrap_or(1.0);
     let radiance = Vec3::from(m.emissive_factor()) * strength;
     if !radiance.is_finite() || radiance.min_element() < 0.0 {
