@@ -204,7 +204,14 @@ impl GrowingMap {
                     d2 <= r2
                 };
                 if enters {
-                    heap_insert(out, k, Neighbor { index: i, dist2: d2 });
+                    heap_insert(
+                        out,
+                        k,
+                        Neighbor {
+                            index: i,
+                            dist2: d2,
+                        },
+                    );
                 }
                 i = self.next[i as usize];
             }

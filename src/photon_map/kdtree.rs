@@ -159,8 +159,7 @@ impl PhotonMap {
 
     /// Bytes the map holds (its allocated photon array plus the struct itself).
     pub fn memory_bytes(&self) -> usize {
-        self.photons.capacity() * std::mem::size_of::<CompactPhoton>()
-            + std::mem::size_of::<Self>()
+        self.photons.capacity() * std::mem::size_of::<CompactPhoton>() + std::mem::size_of::<Self>()
     }
 
     /// A hash of the compact photons in tree order and of the quantisation frame:
@@ -204,17 +203,16 @@ fn build_subtree(photons: &mut [CompactPhoton]) {
 
 /// The axis along which the photons' bounding box is longest (ties: lowest axis).
 fn widest_axis(photons: &[CompactPhoton]) -> usize {
-    let (lo, hi) = photons.iter().fold(
-        ([u32::MAX; 3], [0u32; 3]),
-        |(mut lo, mut hi), p| {
+    let (lo, hi) = photons
+        .iter()
+        .fold(([u32::MAX; 3], [0u32; 3]), |(mut lo, mut hi), p| {
             let g = p.grid();
             for a in 0..3 {
                 lo[a] = lo[a].min(g[a]);
                 hi[a] = hi[a].max(g[a]);
             }
             (lo, hi)
-        },
-    );
+        });
     let ext = [0, 1, 2].map(|a| hi[a] - lo[a]);
     if ext[0] >= ext[1] && ext[0] >= ext[2] {
         0

@@ -116,9 +116,10 @@ impl CompactPhoton {
     /// of dot products, without the square root.
     #[inline]
     pub fn direction_unnormalised(&self) -> Vec3 {
-        let step = 2.0 / OCT_MAX as f32;
-        let x = (self.dir & OCT_MASK) as f32 * step - 1.0;
-        let y = ((self.dir >> OCT_BITS) & OCT_MASK) as f32 * step - 1.0;
+        // (code - 2047) / 2047 is exact at -1, 0 and 1, so the poles decode exactly.
+        const HALF: f32 = (OCT_MAX / 2) as f32;
+        let x = ((self.dir & OCT_MASK) as f32 - HALF) / HALF;
+        let y = (((self.dir >> OCT_BITS) & OCT_MASK) as f32 - HALF) / HALF;
         oct_unfold(x, y)
     }
 
@@ -178,7 +179,8 @@ fn oct_encode(d: Vec3) -> u32 {
     } else {
         (n.x, n.y)
     };
-    let q = |v: f32| ((v.clamp(-1.0, 1.0) + 1.0) * (OCT_MAX as f32 / 2.0)).round() as u32;
+    const HALF: f32 = (OCT_MAX / 2) as f32;
+    let q = |v: f32| (v.clamp(-1.0, 1.0) * HALF + HALF).round() as u32;
     q(x) | (q(y) << OCT_BITS)
 }
 
@@ -199,7 +201,11 @@ impl Quantizer {
     /// `max_power` stores every power as 0.
     pub fn new(min: Vec3, max: Vec3, max_power: f32) -> Self {
         let ok = min.is_finite() && max.is_finite() && min.cmple(max).all();
-        let (min, max) = if ok { (min, max) } else { (Vec3::ZERO, Vec3::ZERO) };
+        let (min, max) = if ok {
+            (min, max)
+        } else {
+            (Vec3::ZERO, Vec3::ZERO)
+        };
         let extent = (0..3)
             .map(|a| max[a] as f64 - min[a] as f64)
             .fold(0.0, f64::max);
@@ -372,14 +378,25 @@ mod tests {
     fn invalid_marker_is_never_an_encoding() {
         // Octahedral codes stop at 4094, the marker's are 4095.
         let q = Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0);
-        for d in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z, Vec3::ONE] {
+        for d in [
+            Vec3::X,
+            -Vec3::X,
+            Vec3::Y,
+            -Vec3::Y,
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::ONE,
+        ] {
             let p = q.encode(&PhotonRecord {
                 position: Vec3::ONE,
                 power: Vec3::ONE,
                 direction: d,
                 depth: 255,
             });
-            assert_ne!(p.dir & 0x00FF_FFFF, CompactPhoton::INVALID.dir & 0x00FF_FFFF);
+            assert_ne!(
+                p.dir & 0x00FF_FFFF,
+                CompactPhoton::INVALID.dir & 0x00FF_FFFF
+            );
             assert_eq!(p.depth(), MAX_DEPTH);
         }
     }
