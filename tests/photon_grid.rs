@@ -124,7 +124,7 @@ fn spreading_a_rejected_photons_power_conserves_the_total() {
     let mut rng = Rng::new(33);
     let mut map = GrowingMap::new(Vec3::ZERO, Vec3::ONE, 0.05).unwrap();
     let mut expected = [0f64; 3];
-    let mut add = |sum: &mut [f64; 3], p: Vec3| {
+    let add = |sum: &mut [f64; 3], p: Vec3| {
         for c in 0..3 {
             sum[c] += p[c] as f64;
         }

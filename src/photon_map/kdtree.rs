@@ -26,7 +26,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 /// Subtrees of at most this many photons are leaves, scanned linearly by queries.
-pub const LEAF_SIZE: usize = 12;
+pub const LEAF_SIZE: usize = 24;
 
 /// Subtrees smaller than this are built sequentially (below it, rayon's task
 /// overhead outweighs the partitioning).
@@ -184,12 +184,12 @@ fn is_valid(r: &PhotonRecord) -> bool {
 fn build_subtree(photons: &mut [CompactPhoton]) {
     let n = photons.len();
     if n <= LEAF_SIZE {
-        photons.sort_unstable_by_key(|p| p.key(0));
+        photons.sort_unstable_by_key(|p| p.bits());
         return;
     }
     let axis = widest_axis(photons);
     let mid = n / 2;
-    photons.select_nth_unstable_by_key(mid, |p| p.key(axis));
+    photons.select_nth_unstable_by(mid, |a, b| a.cmp_on(b, axis));
     photons[mid].set_axis(axis);
     let (left, rest) = photons.split_at_mut(mid);
     let right = &mut rest[1..];
