@@ -6,7 +6,7 @@
 //! included); kiddo builds from `[f32; 3]` points with `u32` items and 32-point
 //! leaves. Ours fills a reused `Vec`, kiddo returns a new `Vec` per query (its API).
 
-use adaptive_pm::photon_map::{PhotonMap, PhotonRecord};
+use adaptive_pm::photon_map::{GrowingMap, PhotonMap, PhotonRecord};
 use adaptive_pm::rng::Rng;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
@@ -91,5 +91,37 @@ fn nearest_50(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, build, nearest_50);
+/// Density control's loop on a growing map: before each insertion, the 10 nearest
+/// photons of the new one (200k photons on the unit square, cells sized so that
+/// about 10 photons of the final map fall within one cell's radius).
+fn growing_map(c: &mut Criterion) {
+    let n = 200_000;
+    let recs: Vec<PhotonRecord> = records(n, 3)
+        .into_iter()
+        .map(|mut r| {
+            r.position.z = 0.0;
+            r
+        })
+        .collect();
+    let cell = (10.0 / (std::f32::consts::PI * n as f32)).sqrt();
+    let mut group = c.benchmark_group("growing_map_200k");
+    group.sample_size(10);
+    group.measurement_time(Duration::from_secs(4));
+    group.warm_up_time(Duration::from_millis(500));
+    group.throughput(Throughput::Elements(n as u64));
+    group.bench_function("query_10_then_insert", |b| {
+        b.iter(|| {
+            let mut map = GrowingMap::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), cell).unwrap();
+            let mut out = Vec::with_capacity(10);
+            for r in &recs {
+                map.nearest_k(r.position, 10, f32::INFINITY, &mut out);
+                map.insert(*r);
+            }
+            map.len()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, build, nearest_50, growing_map);
 criterion_main!(benches);

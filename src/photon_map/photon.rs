@@ -265,12 +265,14 @@ impl Quantizer {
     /// finite and the direction non-zero (`PhotonMap::build` skips other records);
     /// positions outside the box are clamped onto it.
     pub fn encode(&self, r: &PhotonRecord) -> CompactPhoton {
-        let mut pos = 0u64;
-        for a in 0..3 {
-            let g = (r.position[a] as f64 - self.origin[a]) * self.inv_step;
-            let g = round_non_negative(g.clamp(0.0, POSITION_MAX as f64)) as i64 as u64;
-            pos |= g << (a as u32 * POSITION_BITS);
-        }
+        let q = |x: f32, o: f64| {
+            let g = (x as f64 - o) * self.inv_step;
+            round_non_negative(g.max(0.0).min(POSITION_MAX as f64)) as i64 as u64
+        };
+        let p = r.position;
+        let pos = q(p.x, self.origin[0])
+            | (q(p.y, self.origin[1]) << POSITION_BITS)
+            | (q(p.z, self.origin[2]) << (2 * POSITION_BITS));
         let depth = r.depth.min(MAX_DEPTH) as u32;
         CompactPhoton {
             pos,
@@ -283,7 +285,8 @@ impl Quantizer {
         if self.power_scale == 0.0 {
             return 0;
         }
-        let c = [0, 1, 2].map(|i| (power[i].max(0.0) as f64 * self.inv_power_scale).min(1.0));
+        let norm = |v: f32| (v.max(0.0) as f64 * self.inv_power_scale).min(1.0);
+        let c = [norm(power.x), norm(power.y), norm(power.z)];
         let max = c[0].max(c[1]).max(c[2]);
         if max < exp2(-POWER_BIAS - 2) {
             return 0; // rounds to zero at the smallest exponent anyway
@@ -297,8 +300,8 @@ impl Quantizer {
         if mantissa(exp, max) >= 512 {
             exp += 1; // rounding carried; max <= 1 keeps exp <= 31
         }
-        let m = c.map(|v| mantissa(exp, v).min(511));
-        m[0] | (m[1] << 9) | (m[2] << 18) | ((exp as u32) << 27)
+        let m = |v: f64| mantissa(exp, v).min(511);
+        m(c[0]) | (m(c[1]) << 9) | (m(c[2]) << 18) | ((exp as u32) << 27)
     }
 
     /// Decoded position (world units).
