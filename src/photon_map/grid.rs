@@ -185,7 +185,7 @@ impl GrowingMap {
     /// `k == 0` or a negative or NaN radius.
     pub fn nearest_k(&self, p: Vec3, k: usize, max_radius: f32, out: &mut Vec<Neighbor>) {
         out.clear();
-        if k == 0 || self.is_empty() || !p.is_finite() || !(max_radius >= 0.0) {
+        if k == 0 || self.is_empty() || !p.is_finite() || max_radius.is_nan() || max_radius < 0.0 {
             return;
         }
         let r2 = max_radius * max_radius;

@@ -26,7 +26,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 /// Subtrees of at most this many photons are leaves, scanned linearly by queries.
-pub const LEAF_SIZE: usize = 12;
+pub const LEAF_SIZE: usize = 24;
 
 /// Subtrees smaller than this are built sequentially (below it, rayon's task
 /// overhead outweighs the partitioning).
@@ -65,31 +65,32 @@ impl PhotonMap {
     where
         F: Fn(&PhotonRecord) -> bool + Sync,
     {
-        let skipped = records.par_iter().filter(|r| !is_valid(r)).count();
-        let wanted = |r: &PhotonRecord| is_valid(r) && keep(r);
-        // min / max are exact, so this reduction is deterministic in any order.
-        let (min, max, max_power) = records
+        // One pass for the bounds, the largest power and the invalid count; min, max
+        // and integer sums are exact, so the reduction is deterministic in any order.
+        let empty = || (Vec3::INFINITY, Vec3::NEG_INFINITY, 0.0f32, 0usize);
+        let (min, max, max_power, skipped) = records
             .par_iter()
-            .filter(|r| wanted(r))
-            .fold(
-                || (Vec3::INFINITY, Vec3::NEG_INFINITY, 0.0f32),
-                |(lo, hi, pw), r| {
-                    (
-                        lo.min(r.position),
-                        hi.max(r.position),
-                        pw.max(r.power.max_element()),
-                    )
-                },
-            )
-            .reduce(
-                || (Vec3::INFINITY, Vec3::NEG_INFINITY, 0.0f32),
-                |a, b| (a.0.min(b.0), a.1.max(b.1), a.2.max(b.2)),
-            );
+            .with_min_len(4096)
+            .fold(empty, |(lo, hi, pw, bad), r| {
+                if !is_valid(r) {
+                    (lo, hi, pw, bad + 1)
+                } else if keep(r) {
+                    let p = r.power.max_element();
+                    (lo.min(r.position), hi.max(r.position), pw.max(p), bad)
+                } else {
+                    (lo, hi, pw, bad)
+                }
+            })
+            .reduce(empty, |a, b| {
+                (a.0.min(b.0), a.1.max(b.1), a.2.max(b.2), a.3 + b.3)
+            });
+        let wanted = |r: &PhotonRecord| is_valid(r) && keep(r);
         let quant = Quantizer::new(min, max, max_power);
         // An indexed collect writes straight into one Vec of records.len(); the
         // marker + retain keeps the peak at one photon array.
         let mut photons: Vec<CompactPhoton> = records
             .par_iter()
+            .with_min_len(4096)
             .map(|r| {
                 if wanted(r) {
                     quant.encode(r)
@@ -184,12 +185,12 @@ fn is_valid(r: &PhotonRecord) -> bool {
 fn build_subtree(photons: &mut [CompactPhoton]) {
     let n = photons.len();
     if n <= LEAF_SIZE {
-        photons.sort_unstable_by_key(|p| p.key(0));
+        photons.sort_unstable_by_key(|p| p.bits());
         return;
     }
     let axis = widest_axis(photons);
     let mid = n / 2;
-    photons.select_nth_unstable_by_key(mid, |p| p.key(axis));
+    photons.select_nth_unstable_by(mid, |a, b| a.cmp_on(b, axis));
     photons[mid].set_axis(axis);
     let (left, rest) = photons.split_at_mut(mid);
     let right = &mut rest[1..];

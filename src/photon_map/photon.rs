@@ -116,9 +116,10 @@ impl CompactPhoton {
     /// of dot products, without the square root.
     #[inline]
     pub fn direction_unnormalised(&self) -> Vec3 {
-        let step = 2.0 / OCT_MAX as f32;
-        let x = (self.dir & OCT_MASK) as f32 * step - 1.0;
-        let y = ((self.dir >> OCT_BITS) & OCT_MASK) as f32 * step - 1.0;
+        // (code - 2047) / 2047 is exact at -1, 0 and 1, so the poles decode exactly.
+        const HALF: f32 = (OCT_MAX / 2) as f32;
+        let x = ((self.dir & OCT_MASK) as f32 - HALF) / HALF;
+        let y = (((self.dir >> OCT_BITS) & OCT_MASK) as f32 - HALF) / HALF;
         oct_unfold(x, y)
     }
 
@@ -128,18 +129,14 @@ impl CompactPhoton {
         (self.pos, ((self.power as u64) << 32) | self.dir as u64)
     }
 
-    /// A total order whose first key is the coordinate on `axis`: the position word
-    /// rotated so that `axis` comes first, then the power and direction words. Equal
-    /// keys mean bitwise-equal photons, which is what makes the build canonical.
+    /// A total order whose first key is the coordinate on `axis`, then all 16 bytes:
+    /// equal means bitwise equal, which is what makes the build canonical. (Photons
+    /// being partitioned have no split axis written yet, so the axis bits are 0.)
     #[inline(always)]
-    pub(crate) fn key(&self, axis: usize) -> (u64, u64) {
-        // Rotating the 63 used bits left by 42 - 21 axis moves `axis` to the top.
-        const USED: u64 = (1 << (3 * POSITION_BITS)) - 1;
-        let r = (2 - axis as u32) * POSITION_BITS;
-        let pos = ((self.pos << r) | (self.pos >> (3 * POSITION_BITS - r))) & USED;
-        // Clear the axis bits: they are written during the build and must not reorder.
-        let rest = ((self.power as u64) << 32) | (self.dir & !(3 << AXIS_SHIFT)) as u64;
-        (pos, rest)
+    pub(crate) fn cmp_on(&self, other: &Self, axis: usize) -> std::cmp::Ordering {
+        self.coord(axis)
+            .cmp(&other.coord(axis))
+            .then_with(|| self.bits().cmp(&other.bits()))
     }
 }
 
@@ -167,6 +164,21 @@ fn sign_not_zero(v: f32) -> f32 {
     }
 }
 
+/// Rounds a value >= 0 to the nearest integer (halves up). `f64::round` is a libm
+/// call on baseline x86-64; a truncating cast is one instruction.
+#[inline(always)]
+fn round_non_negative(v: f64) -> f64 {
+    // i64, not u64: f64 -> u64 is a branchy sequence on x86-64, f64 -> i64 one instruction.
+    ((v + 0.5) as i64) as f64
+}
+
+/// `2^n` for `n` in the normal range of f64 (`powi` is a loop in compiler-rt).
+#[inline(always)]
+fn exp2(n: i32) -> f64 {
+    debug_assert!((-1022..=1023).contains(&n));
+    f64::from_bits(((n + 1023) as u64) << 52)
+}
+
 /// Octahedral code of a non-zero direction.
 fn oct_encode(d: Vec3) -> u32 {
     let n = d / (d.x.abs() + d.y.abs() + d.z.abs());
@@ -178,7 +190,8 @@ fn oct_encode(d: Vec3) -> u32 {
     } else {
         (n.x, n.y)
     };
-    let q = |v: f32| ((v.clamp(-1.0, 1.0) + 1.0) * (OCT_MAX as f32 / 2.0)).round() as u32;
+    const HALF: f32 = (OCT_MAX / 2) as f32;
+    let q = |v: f32| (v.clamp(-1.0, 1.0) * HALF + HALF + 0.5) as i32 as u32;
     q(x) | (q(y) << OCT_BITS)
 }
 
@@ -190,6 +203,7 @@ pub struct Quantizer {
     step: f64,
     inv_step: f64,
     power_scale: f64,
+    inv_power_scale: f64,
 }
 
 impl Quantizer {
@@ -223,6 +237,11 @@ impl Quantizer {
             step,
             inv_step: 1.0 / step,
             power_scale,
+            inv_power_scale: if power_scale > 0.0 {
+                1.0 / power_scale
+            } else {
+                0.0
+            },
         }
     }
 
@@ -246,12 +265,14 @@ impl Quantizer {
     /// finite and the direction non-zero (`PhotonMap::build` skips other records);
     /// positions outside the box are clamped onto it.
     pub fn encode(&self, r: &PhotonRecord) -> CompactPhoton {
-        let mut pos = 0u64;
-        for a in 0..3 {
-            let g = ((r.position[a] as f64 - self.origin[a]) * self.inv_step).round();
-            let g = g.clamp(0.0, POSITION_MAX as f64) as u64;
-            pos |= g << (a as u32 * POSITION_BITS);
-        }
+        let q = |x: f32, o: f64| {
+            let g = (x as f64 - o) * self.inv_step;
+            round_non_negative(g.max(0.0).min(POSITION_MAX as f64)) as i64 as u64
+        };
+        let p = r.position;
+        let pos = q(p.x, self.origin[0])
+            | (q(p.y, self.origin[1]) << POSITION_BITS)
+            | (q(p.z, self.origin[2]) << (2 * POSITION_BITS));
         let depth = r.depth.min(MAX_DEPTH) as u32;
         CompactPhoton {
             pos,
@@ -264,21 +285,23 @@ impl Quantizer {
         if self.power_scale == 0.0 {
             return 0;
         }
-        let c = [0, 1, 2].map(|i| (power[i].max(0.0) as f64 / self.power_scale).min(1.0));
+        let norm = |v: f32| (v.max(0.0) as f64 * self.inv_power_scale).min(1.0);
+        let c = [norm(power.x), norm(power.y), norm(power.z)];
         let max = c[0].max(c[1]).max(c[2]);
-        if max < 2f64.powi(-POWER_BIAS - 2) {
+        if max < exp2(-POWER_BIAS - 2) {
             return 0; // rounds to zero at the smallest exponent anyway
         }
         // Exact binary exponent of `max` (normal since max >= 2^-41): max in [2^e, 2^(e+1)).
         let e = ((max.to_bits() >> 52) & 0x7ff) as i32 - 1023;
         // E - 39 = e - 8 puts the largest mantissa in [256, 512).
         let mut exp = (e + POWER_BIAS - 8).clamp(0, 31);
-        let mantissa = |exp: i32, v: f64| (v * 2f64.powi(POWER_BIAS - exp)).round() as u32;
+        let mantissa =
+            |exp: i32, v: f64| round_non_negative(v * exp2(POWER_BIAS - exp)) as i32 as u32;
         if mantissa(exp, max) >= 512 {
             exp += 1; // rounding carried; max <= 1 keeps exp <= 31
         }
-        let m = c.map(|v| mantissa(exp, v).min(511));
-        m[0] | (m[1] << 9) | (m[2] << 18) | ((exp as u32) << 27)
+        let m = |v: f64| mantissa(exp, v).min(511);
+        m(c[0]) | (m(c[1]) << 9) | (m(c[2]) << 18) | ((exp as u32) << 27)
     }
 
     /// Decoded position (world units).
@@ -295,7 +318,7 @@ impl Quantizer {
     /// Decoded power.
     pub fn power(&self, p: &CompactPhoton) -> Vec3 {
         let exp = (p.power >> 27) as i32;
-        let unit = 2f64.powi(exp - POWER_BIAS) * self.power_scale;
+        let unit = exp2(exp - POWER_BIAS) * self.power_scale;
         let m = |i: u32| ((p.power >> (9 * i)) & 511) as f64 * unit;
         Vec3::new(m(0) as f32, m(1) as f32, m(2) as f32)
     }
@@ -312,7 +335,7 @@ impl Quantizer {
 
     /// A query point in grid units (f32; see `query.rs` for why it is clamped).
     #[inline]
-    pub(crate) fn to_grid(&self, p: Vec3) -> [f32; 3] {
+    pub(crate) fn grid_point(&self, p: Vec3) -> [f32; 3] {
         // 2^40 grid steps is 2^19 map extents away: any farther point is clamped there,
         // which keeps squared distances finite in f32 (their order is kept).
         const FAR: f64 = (1u64 << 40) as f64;
@@ -353,7 +376,7 @@ mod tests {
     }
 
     #[test]
-    fn key_puts_the_axis_first_and_ignores_the_split_axis() {
+    fn order_puts_the_axis_first_and_split_axis_does_not_change_the_photon() {
         let q = Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0);
         let r = |x: f32, y: f32| PhotonRecord {
             position: Vec3::new(x, y, 0.5),
@@ -363,12 +386,11 @@ mod tests {
         };
         let a = q.encode(&r(0.1, 0.9));
         let mut b = q.encode(&r(0.9, 0.1));
-        assert!(a.key(0) < b.key(0));
-        assert!(a.key(1) > b.key(1));
-        let before = b.key(2);
+        assert!(a.cmp_on(&b, 0).is_lt());
+        assert!(a.cmp_on(&b, 1).is_gt());
+        assert!(a.cmp_on(&a, 2).is_eq());
         b.set_axis(2);
         assert_eq!(b.axis(), 2);
-        assert_eq!(b.key(2), before);
         assert_eq!(q.decode(&b), q.decode(&q.encode(&r(0.9, 0.1))));
     }
 

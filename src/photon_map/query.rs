@@ -58,12 +58,12 @@ impl PhotonMap {
         F: Fn(&CompactPhoton) -> bool,
     {
         out.clear();
-        if k == 0 || self.is_empty() || !p.is_finite() || !(max_radius >= 0.0) {
+        if k == 0 || self.is_empty() || !p.is_finite() || max_radius.is_nan() || max_radius < 0.0 {
             return;
         }
         let r = self.quant.grid_length(max_radius);
         let mut search = Knn {
-            q: self.quant.to_grid(p),
+            q: self.quant.grid_point(p),
             k,
             r2: (r * r).min(f32::MAX as f64) as f32,
             heap: out,
@@ -83,12 +83,12 @@ impl PhotonMap {
     /// first) in an unspecified but deterministic order (sort by `dist2` if needed).
     pub fn within_radius(&self, p: Vec3, radius: f32, out: &mut Vec<Neighbor>) {
         out.clear();
-        if self.is_empty() || !p.is_finite() || !(radius >= 0.0) {
+        if self.is_empty() || !p.is_finite() || radius.is_nan() || radius < 0.0 {
             return;
         }
         let r = self.quant.grid_length(radius);
         let mut search = Within {
-            q: self.quant.to_grid(p),
+            q: self.quant.grid_point(p),
             r2: if radius == f32::INFINITY {
                 f32::INFINITY
             } else {
@@ -107,9 +107,9 @@ impl PhotonMap {
 #[inline(always)]
 fn dist2(q: &[f32; 3], p: &CompactPhoton) -> f32 {
     let g = p.grid();
-    let dx = q[0] - g[0] as f32;
-    let dy = q[1] - g[1] as f32;
-    let dz = q[2] - g[2] as f32;
+    let dx = q[0] - g[0] as i32 as f32;
+    let dy = q[1] - g[1] as i32 as f32;
+    let dz = q[2] - g[2] as i32 as f32;
     dx * dx + dy * dy + dz * dz
 }
 
@@ -206,8 +206,18 @@ impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
     fn visit(&mut self, photons: &[CompactPhoton], base: usize, mut off: [f32; 3]) {
         let n = photons.len();
         if n <= LEAF_SIZE {
-            for (i, p) in photons.iter().enumerate() {
-                self.consider(base + i, p);
+            // Distances first, in a loop the compiler can vectorise; then the heap.
+            let mut d2 = [0.0f32; LEAF_SIZE];
+            for (d, p) in d2.iter_mut().zip(photons) {
+                *d = dist2(&self.q, p);
+            }
+            for (i, (&d, p)) in d2.iter().zip(photons).enumerate() {
+                if self.may_enter(d) && (self.accept)(p) {
+                    self.insert(Neighbor {
+                        index: (base + i) as u32,
+                        dist2: d,
+                    });
+                }
             }
             return;
         }
