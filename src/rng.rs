@@ -77,18 +77,24 @@ mod tests {
 
     #[test]
     fn same_key_same_sequence_and_keys_differ() {
-        let a: Vec<u32> = (0..8).map({
-            let mut r = Rng::new(42);
-            move |_| r.next_u32()
-        }).collect();
-        let b: Vec<u32> = (0..8).map({
-            let mut r = Rng::new(42);
-            move |_| r.next_u32()
-        }).collect();
-        let c: Vec<u32> = (0..8).map({
-            let mut r = Rng::new(43);
-            move |_| r.next_u32()
-        }).collect();
+        let a: Vec<u32> = (0..8)
+            .map({
+                let mut r = Rng::new(42);
+                move |_| r.next_u32()
+            })
+            .collect();
+        let b: Vec<u32> = (0..8)
+            .map({
+                let mut r = Rng::new(42);
+                move |_| r.next_u32()
+            })
+            .collect();
+        let c: Vec<u32> = (0..8)
+            .map({
+                let mut r = Rng::new(43);
+                move |_| r.next_u32()
+            })
+            .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
     }
@@ -105,6 +111,9 @@ mod tests {
         }
         let mean = sum / n as f64;
         // standard error of the mean of U(0,1) is 1/sqrt(12 n) ~ 6.5e-4; 5 sigma
-        assert!((mean - 0.5).abs() < 5.0 * (1.0 / (12.0 * n as f64)).sqrt(), "{mean}");
+        assert!(
+            (mean - 0.5).abs() < 5.0 * (1.0 / (12.0 * n as f64)).sqrt(),
+            "{mean}"
+        );
     }
 }
