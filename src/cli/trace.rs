@@ -72,6 +72,8 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         "sigma_density_primary": metrics.primary.sigma,
         "sigma_over_mean_primary": metrics.primary.sigma_over_mean,
         "trace_s": r.trace_s,
+        "rays": r.rays,
+        "mrays_per_s": r.mrays_per_s,
         "trace_primary_s": r.trace_primary_s,
         "build_s": maps.build_s,
         "build_primary_s": maps.build_primary_s,

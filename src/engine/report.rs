@@ -55,6 +55,11 @@ pub struct TraceReport {
     pub density_rejected: u64,
     /// Sum of the stored photons' RGB power.
     pub stored_power: [f64; 3],
+    /// Rays cast (every photon of every wave: hits plus escapes).
+    pub rays: u64,
+    /// Rays cast per second of the whole trace, in millions: the tracer's
+    /// throughput, shading and storage included.
+    pub mrays_per_s: f64,
     /// Wall time of the whole trace.
     pub trace_s: f64,
     /// Wall time of wave 0 (emission and first hits): the primary map's trace.
@@ -78,6 +83,8 @@ impl TraceReport {
             density_accepted: 0,
             density_rejected: 0,
             stored_power: [0.0; 3],
+            rays: 0,
+            mrays_per_s: 0.0,
             trace_s: 0.0,
             trace_primary_s: 0.0,
         }
@@ -110,6 +117,10 @@ impl TraceReport {
         self.reemitted_first_hit = self.depths.first().map_or(0, |d| d.children);
         self.capped_hits = self.depths.iter().map(|d| d.capped).sum();
         self.trace_primary_s = self.depths.first().map_or(0.0, |d| d.seconds);
+        self.rays = self.depths.iter().map(|d| d.hits + d.escaped).sum();
+        if self.trace_s > 0.0 {
+            self.mrays_per_s = self.rays as f64 / self.trace_s / 1e6;
+        }
         self.split_rate_by_depth = self
             .depths
             .iter()
