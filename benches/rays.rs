@@ -2,11 +2,17 @@
 //! `unsafe` baseline) against the safe wrapper's single-ray and batch paths
 //! (both batch kernels), on one thread.
 //!
-//! Sweep: two scenes (a closed box of 12 triangles; the same box with every
-//! face tessellated into 2 x 64 x 64 triangles, 49k in all) times two ray
-//! sets (incoherent: random origins inside, uniform directions, as photon
-//! paths are; coherent: a grid of parallel rays, as camera rays are).
-//! The lead will switch the scene to the Cornell box.
+//! Sweep: three scenes (the built-in Cornell box with `bench rays`' incoherent
+//! rays: origins area-uniform on the surfaces, cosine directions; a closed box
+//! of 12 triangles; the same box with every face tessellated into
+//! 2 x 64 x 64 triangles, 49k in all) times ray sets (incoherent: random
+//! origins inside, uniform directions, as photon paths are; coherent: a grid
+//! of parallel rays, as camera rays are).
+//!
+//! A second group, `tracer`, puts the photon tracer itself (classic mode,
+//! Cornell box, N_MAX = 1e5, one thread, shading and storage included) beside
+//! the raw call on the Cornell rays, both in rays per second: the tracer's
+//! share of raw Embree throughput.
 //!
 //! Timed in *thread CPU time* (`CLOCK_THREAD_CPUTIME_ID`) on Linux, not wall
 //! time: the development machine runs several jobs on 2 cores and wall-clock
@@ -15,10 +21,12 @@
 //! back to wall time.
 
 use adaptive_pm::embree::{
-    set_flush_denormals, BatchKernel, CommittedScene, Device, Ray, SceneBuilder,
+    set_flush_denormals, thread_pool, BatchKernel, CommittedScene, Device, Ray, SceneBuilder,
 };
+use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::rng::Rng;
 use adaptive_pm::sampling::spherical_direction;
+use adaptive_pm::scene::Scene;
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use embree_sys as sys;
 use glam::Vec3;
@@ -154,6 +162,13 @@ fn raw(scene: &CommittedScene, rays: &[Ray]) -> usize {
     hits
 }
 
+fn cornell_rays(scene: &Scene) -> Vec<Ray> {
+    let (lo, hi) = scene.bounds();
+    scene
+        .surface_sampler()
+        .incoherent_rays(RAYS, 1, 1e-5 * (hi - lo).length())
+}
+
 fn bench_rays(c: &mut Criterion) {
     set_flush_denormals();
     let device = Device::new().unwrap();
@@ -161,21 +176,33 @@ fn bench_rays(c: &mut Criterion) {
     group.throughput(Throughput::Elements(RAYS as u64));
     group.sample_size(20);
     group.measurement_time(Duration::from_secs(3));
+    let cornell = Scene::cornell().unwrap();
+    let mut cases = vec![(
+        "cornell",
+        cornell.commit(&device).unwrap(),
+        vec![("incoherent", cornell_rays(&cornell))],
+    )];
     for (scene_name, n) in [("box12", 1), ("box49k", 64)] {
-        let scene = scene(&device, n);
-        for (ray_name, rays) in [
-            ("incoherent", incoherent_rays()),
-            ("coherent", coherent_rays()),
-        ] {
+        cases.push((
+            scene_name,
+            scene(&device, n),
+            vec![
+                ("incoherent", incoherent_rays()),
+                ("coherent", coherent_rays()),
+            ],
+        ));
+    }
+    for (scene_name, scene, ray_sets) in &cases {
+        for (ray_name, rays) in ray_sets {
             let id = |path: &str| BenchmarkId::new(path, format!("{scene_name}/{ray_name}"));
             let mut hits = vec![None; rays.len()];
             group.bench_function(id("raw"), |b| {
-                b.iter_custom(|iters| timed(iters, || raw(&scene, black_box(&rays))))
+                b.iter_custom(|iters| timed(iters, || raw(scene, black_box(rays))))
             });
             group.bench_function(id("single"), |b| {
                 b.iter_custom(|iters| {
                     timed(iters, || {
-                        black_box(&rays)
+                        black_box(rays)
                             .iter()
                             .filter(|r| scene.intersect(r).is_some())
                             .count()
@@ -189,7 +216,7 @@ fn bench_rays(c: &mut Criterion) {
                 group.bench_function(id(name), |b| {
                     b.iter_custom(|iters| {
                         timed(iters, || {
-                            scene.intersect_batch_with(kernel, black_box(&rays), &mut hits);
+                            scene.intersect_batch_with(kernel, black_box(rays), &mut hits);
                             hits.iter().filter(|h| h.is_some()).count()
                         })
                     })
@@ -200,5 +227,36 @@ fn bench_rays(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_rays);
+/// The tracer's rays per second against raw Embree on the same scene and thread.
+fn bench_tracer(c: &mut Criterion) {
+    let device = Device::new().unwrap();
+    let scene = Scene::cornell().unwrap();
+    let rt = scene.commit(&device).unwrap();
+    let pool = thread_pool(1).unwrap();
+    let cfg = TraceConfig::new(Mode::Classic, Budget::NMax(100_000));
+    let mut tracer = Tracer::new(&scene, &rt);
+    // The ray count of a run is fixed by its seed.
+    let rays_per_trace = pool.install(|| tracer.trace(&cfg).unwrap().report.rays);
+    let rays = cornell_rays(&scene);
+    let mut group = c.benchmark_group("tracer");
+    group.sample_size(10);
+    group.measurement_time(Duration::from_secs(5));
+    group.throughput(Throughput::Elements(rays.len() as u64));
+    group.bench_function("raw_cornell_incoherent", |b| {
+        b.iter_custom(|iters| pool.install(|| timed(iters, || raw(&rt, black_box(&rays)))))
+    });
+    group.throughput(Throughput::Elements(rays_per_trace));
+    group.bench_function("classic_trace_cornell", |b| {
+        b.iter_custom(|iters| {
+            pool.install(|| {
+                timed(iters, || {
+                    tracer.trace(black_box(&cfg)).unwrap().records.len()
+                })
+            })
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_rays, bench_tracer);
 criterion_main!(benches);

@@ -28,12 +28,12 @@ impl Rng {
     /// A generator whose whole sequence is fixed by `key` (for instance
     /// `hash2(seed, photon_id)`).
     pub fn new(key: u64) -> Self {
+        // Both words hashed from the key: nearby keys (photon i and i + 1)
+        // start on unrelated states and streams.
         let mut rng = Rng {
-            state: 0,
+            state: mix64(key),
             inc: (mix64(key ^ 0xDA3E_39CB_94B9_5BDB) << 1) | 1,
         };
-        rng.next_u32();
-        rng.state = rng.state.wrapping_add(mix64(key));
         rng.next_u32();
         rng
     }

@@ -136,7 +136,7 @@ impl TraceConfig {
             estimator: Estimator::Paper,
             analysis: AnalysisParams::default(),
             density_target: DensityTarget::Auto,
-            batch: 4096,
+            batch: 1024,
         }
     }
 

@@ -248,28 +248,24 @@ impl<'s> Tracer<'s> {
 
     /// Wave 0: every light's photons, photon `i` of light `l` keyed by (seed, l, i).
     fn emit(&self, cfg: &TraceConfig, plans: &[LightPlan], epsilon: f32) -> Vec<PathState> {
-        let mut starts = Vec::with_capacity(plans.len());
-        let mut total = 0u64;
-        for p in plans {
-            starts.push(total);
-            total += p.photons;
-        }
-        let lights = &self.scene.lights;
-        (0..total)
-            .into_par_iter()
-            .map(|g| {
-                let l = starts.partition_point(|&s| s <= g) - 1;
-                let i = g - starts[l];
-                let key = hash2(hash2(cfg.seed, l as u64), i);
+        let total: u64 = plans.iter().map(|p| p.photons).sum();
+        let mut queue = Vec::with_capacity(total as usize);
+        for (l, (light, plan)) in self.scene.lights.iter().zip(plans).enumerate() {
+            let power = photon_power(light, plan);
+            let light_key = hash2(cfg.seed, l as u64);
+            // Indexed: par_extend keeps photon i at position start + i.
+            queue.par_extend((0..plan.photons).into_par_iter().map(|i| {
+                let key = hash2(light_key, i);
                 let mut rng = Rng::new(key);
-                let e = lights[l].sample(rng.next_f32(), rng.next_2d(), rng.next_2d());
+                let e = light.sample(rng.next_f32(), rng.next_2d(), rng.next_2d());
                 PathState {
                     origin: e.origin + e.normal.unwrap_or_default() * epsilon,
                     direction: e.direction,
-                    power: photon_power(&lights[l], &plans[l]) * e.weight,
+                    power: power * e.weight,
                     key,
                 }
-            })
-            .collect()
+            }));
+        }
+        queue
     }
 }

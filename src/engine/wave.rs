@@ -126,13 +126,13 @@ fn shade_hit(ctx: &ShadeContext, p: &PathState, h: &Hit, out: &mut BatchOut) {
     };
     let (m, capped) = expected_children(s, r, ctx.split_cap);
     out.capped += u64::from(capped);
-    let mut rng = Rng::new(hash2(p.key, 0x5E1E_C7ED));
+    // One stream per hit: the rounding, then each child's direction in turn.
+    let mut rng = Rng::new(p.key ^ 0x5E1E_C7ED_0000_0000);
     let k = round_stochastic(m, rng.next_f32());
     let scale = (1.0 / m) as f32;
     for c in 0..k {
         let key = hash2(p.key, c as u64 + 1);
-        let mut crng = Rng::new(key ^ 0xD1EC_7104);
-        let Some(bs) = brdf.sample(wi, crng.next_2d()) else {
+        let Some(bs) = brdf.sample(wi, rng.next_2d()) else {
             continue;
         };
         let power = p.power * bs.weight * scale;

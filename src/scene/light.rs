@@ -40,6 +40,8 @@ pub struct AreaLight {
     /// Total area.
     pub area: f32,
     triangles: Vec<[Vec3; 3]>,
+    /// Each triangle's emission frame (z = its geometric normal).
+    frames: Vec<Frame>,
     cdf: Vec<f32>,
 }
 
@@ -56,11 +58,16 @@ impl AreaLight {
         if acc <= 0.0 {
             return None;
         }
+        let frames = triangles
+            .iter()
+            .map(|&[a, b, c]| Frame::from_normal((b - a).cross(c - a).normalize()))
+            .collect();
         Some(AreaLight {
             mesh: index,
             emission,
             area: acc as f32,
             triangles,
+            frames,
             cdf,
         })
     }
@@ -86,12 +93,12 @@ impl AreaLight {
         let [a, b, c] = self.triangles[i];
         let (b0, b1) = uniform_triangle(u_pos);
         let origin = a * b0 + b * b1 + c * (1.0 - b0 - b1);
-        let normal = (b - a).cross(c - a).normalize();
+        let frame = &self.frames[i];
         let local = self.emission.profile.sample_emission(u_dir);
         EmittedPhoton {
             origin,
-            direction: Frame::from_normal(normal).world_from_local(local),
-            normal: Some(normal),
+            direction: frame.world_from_local(local),
+            normal: Some(frame.n),
             weight: Vec3::ONE,
         }
     }
