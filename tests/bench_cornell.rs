@@ -45,7 +45,12 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();
     for r in &rows {
-        assert_eq!(r.len(), header.len(), "{}: ragged row {r:?}", path.display());
+        assert_eq!(
+            r.len(),
+            header.len(),
+            "{}: ragged row {r:?}",
+            path.display()
+        );
     }
     (header, rows)
 }
@@ -147,7 +152,10 @@ fn adaptive_emits_fewer_primary_photons_as_n_grows() {
     assert_eq!(e[0], N_MAX, "a diffuse light has alpha_D = 1");
     assert!(e[1] * 2 < e[0] && e[2] * 2 < e[1], "{e:?}");
     // classic always emits N_MAX
-    assert!(r.mode_runs(Mode::Classic).iter().all(|x| x.emitted == N_MAX));
+    assert!(r
+        .mode_runs(Mode::Classic)
+        .iter()
+        .all(|x| x.emitted == N_MAX));
 }
 
 /// The classic primary map concentrates under a directional light. Two max
@@ -180,11 +188,19 @@ fn adaptive_split_rate_falls_with_depth() {
     for run in r.mode_runs(Mode::Adaptive).iter().filter(|x| x.n > 0.0) {
         let rates = judged_rates(run, r.max_depth);
         assert!(rates.len() >= 3, "n = {}: {rates:?}", run.n);
-        assert!(rates[0].1 > 1.0 && rates[1].1 < 1.0, "n = {}: {rates:?}", run.n);
+        assert!(
+            rates[0].1 > 1.0 && rates[1].1 < 1.0,
+            "n = {}: {rates:?}",
+            run.n
+        );
         assert!(rates[1].1 < rates[0].1 - 3.0 * rates[0].2.max(rates[1].2));
         for w in rates[1..].windows(2) {
             let (a, b) = (w[0], w[1]);
-            assert!(b.1 <= a.1 + 3.0 * a.2.max(b.2), "n = {}: {a:?} -> {b:?}", run.n);
+            assert!(
+                b.1 <= a.1 + 3.0 * a.2.max(b.2),
+                "n = {}: {a:?} -> {b:?}",
+                run.n
+            );
         }
     }
 }

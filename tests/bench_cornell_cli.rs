@@ -16,7 +16,11 @@ fn json_prints_one_object_with_the_runs() {
         .arg(dir.path())
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8(out.stdout).unwrap();
     let mut objects = serde_json::Deserializer::from_str(&text).into_iter::<serde_json::Value>();
     let v = objects.next().unwrap().unwrap();
