@@ -13,6 +13,7 @@ pub mod embree;
 pub mod emitter;
 pub mod engine;
 pub mod error;
+pub mod experiments;
 pub mod photon_map;
 pub mod rng;
 pub mod sampling;

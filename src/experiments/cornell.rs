@@ -1,0 +1,458 @@
+//! The paper's experiments (SPEC §4): the built-in Cornell box, its light's
+//! `cos^n` exponent swept, every mode traced at each `n` with the same `N_MAX`.
+//!
+//! - **Reference**: the classic mode with a diffuse light (n = 0), traced first.
+//!   Its primary map's max density is Fig. 7a's reference line, its full map's
+//!   sigma Fig. 9a's, and its full map's mean density is the density-control
+//!   target of every density-mode run (SPEC: "the classic mode's mean density
+//!   with a diffuse light"). When the sweep itself has the classic run at n = 0,
+//!   that run *is* the reference (same seed, same photons) and is not traced twice.
+//! - **One trace per run** gives both maps: records carry their depth, and
+//!   [`Maps::build`] builds the primary-only and the full kd-tree.
+//! - **Same evaluation points** for every run: only the light's exponent changes
+//!   between runs, not the geometry, so the points are drawn once.
+//! - **Reuse**: one Embree device and committed scene for the whole sweep, one
+//!   [`Tracer`] per `n` (the scene it borrows changes with `n`), every trace on
+//!   the caller's rayon pool.
+//! - **Both directionality estimators**: the run uses the configured one; the
+//!   other's `alpha_D` is computed too (the analysis alone, no trace) so that
+//!   `alpha_D(n) (n + 2) / 2` is reported for both ([`AlphaRow`]).
+
+use crate::analysis::{analyze_emitter, AnalysisParams, Estimator};
+use crate::embree::Device;
+use crate::emitter::CosN;
+use crate::engine::measure::{DENSITY_POINTS, DENSITY_POINTS_SEED};
+use crate::engine::{measure, Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer};
+use crate::error::{Error, Result};
+use crate::scene::{Scene, SurfacePoint};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// What the sweep runs.
+#[derive(Clone, Debug)]
+pub struct CornellConfig {
+    /// Light exponents, in the order they are run (see [`super::sweep::parse_sweep`]).
+    pub n_values: Vec<f64>,
+    /// `N_MAX` of every run (the paper: 100 000).
+    pub n_max: u64,
+    /// Modes run at each `n` (the reference classic run at n = 0 is always made).
+    pub modes: Vec<Mode>,
+    /// Seed of every run (runs at different `n` share it).
+    pub seed: u64,
+    /// The estimator that sets `alpha_D` in the adaptive runs.
+    pub estimator: Estimator,
+    /// Bounce limit of every run.
+    pub max_depth: u32,
+}
+
+impl CornellConfig {
+    /// The paper's setting: `n` = 1..=200, `N_MAX` = 100 000, the three modes,
+    /// the paper's estimator.
+    pub fn paper() -> Self {
+        CornellConfig {
+            n_values: (1..=200).map(f64::from).collect(),
+            n_max: 100_000,
+            modes: Mode::ALL.to_vec(),
+            seed: 1,
+            estimator: Estimator::Paper,
+            max_depth: crate::engine::config::DEFAULT_MAX_DEPTH,
+        }
+    }
+
+    /// Checks the settings before anything is traced.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for an empty sweep or mode list, an exponent
+    /// that is not finite and >= 0, or a bad trace setting.
+    pub fn validate(&self) -> Result<()> {
+        if self.n_values.is_empty() {
+            return Err(Error::param("n sweep", "holds no value"));
+        }
+        if self.modes.is_empty() {
+            return Err(Error::param("modes", "holds no mode"));
+        }
+        for &n in &self.n_values {
+            CosN::new(n as f32)?;
+        }
+        self.trace_config(Mode::Classic).validate()
+    }
+
+    fn trace_config(&self, mode: Mode) -> TraceConfig {
+        let mut cfg = TraceConfig::new(mode, Budget::NMax(self.n_max));
+        cfg.seed = self.seed;
+        cfg.estimator = self.estimator;
+        cfg.max_depth = self.max_depth;
+        cfg
+    }
+
+    /// Traces the sweep makes: the reference, plus every (n, mode) pair but the
+    /// classic run at n = 0 that the reference stands for.
+    pub fn run_count(&self) -> usize {
+        let reused = usize::from(self.modes.contains(&Mode::Classic))
+            * self.n_values.iter().filter(|&&n| n == 0.0).count();
+        1 + self.n_values.len() * self.modes.len() - reused
+    }
+}
+
+/// Every metric of one run (SPEC §3). Densities are photons per unit area of
+/// the scene (the built-in box is in millimetres: photons / mm^2).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RunMetrics {
+    /// The light's exponent.
+    pub n: f64,
+    /// The mode.
+    pub mode: Mode,
+    /// `N_MAX`.
+    pub n_max: u64,
+    /// Photons emitted by the light.
+    pub emitted: u64,
+    /// Photons stored, all depths.
+    pub stored: u64,
+    /// Photons stored at their first hit (the primary map).
+    pub stored_primary: u64,
+    /// Photons re-emitted from first hits (Fig. 8).
+    pub reemitted_first_hit: u64,
+    /// Mean children per hit at each depth, depth 0 first (Fig. 9b). The last
+    /// entry at `max_depth` is 0 by construction: paths stop there.
+    pub split_rate_by_depth: Vec<f64>,
+    /// Hits per depth (the denominators of the split rates).
+    pub hits_by_depth: Vec<u64>,
+    /// Max density of the primary map over the evaluation points (Fig. 7a).
+    pub max_density_primary: f64,
+    /// Mean density of the primary map.
+    pub mean_density_primary: f64,
+    /// Standard deviation of the primary map's density.
+    pub sigma_density_primary: f64,
+    /// `sigma / mean` of the primary map's density.
+    pub sigma_over_mean_primary: f64,
+    /// Max density of the full map.
+    pub max_density: f64,
+    /// Mean density of the full map.
+    pub mean_density: f64,
+    /// Standard deviation of the full map's density (Fig. 9a).
+    pub sigma_density: f64,
+    /// `sigma / mean` of the full map's density (Fig. 9a, normalised).
+    pub sigma_over_mean: f64,
+    /// Seconds to trace every depth.
+    pub trace_s: f64,
+    /// Seconds to trace wave 0 (emission and first hits).
+    pub trace_primary_s: f64,
+    /// Seconds to build the full kd-tree.
+    pub build_s: f64,
+    /// Seconds to build the primary kd-tree.
+    pub build_primary_s: f64,
+    /// Time to have the primary map: `trace_primary_s + build_primary_s` (Fig. 7b).
+    pub primary_map_time_s: f64,
+    /// Seconds to evaluate both maps' densities.
+    pub measure_s: f64,
+    /// True when the memory budget bound.
+    pub budget_bound: bool,
+    /// Hits where the per-hit split cap bound.
+    pub capped_hits: u64,
+    /// Photons density control refused (their power went to neighbours).
+    pub density_rejected: u64,
+    /// `alpha_D` the run used for the light (1 in the classic and density modes).
+    pub alpha_d: f64,
+    /// `alpha_D` of the light by the paper's estimator (whatever the run used).
+    pub alpha_d_paper: f64,
+    /// `alpha_D` of the light by the peak-density estimator.
+    pub alpha_d_peak: f64,
+}
+
+/// `alpha_D` of the light at one `n`, both estimators, and how far each is
+/// from the value `2 / (n + 2)` that keeps the peak density of the emitted
+/// directions equal to a diffuse light's (1 = exact).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct AlphaRow {
+    /// The exponent.
+    pub n: f64,
+    /// The paper's estimator.
+    pub alpha_d_paper: f64,
+    /// The peak-density estimator.
+    pub alpha_d_peak: f64,
+    /// `alpha_d_paper * (n + 2) / 2`.
+    pub ratio_paper: f64,
+    /// `alpha_d_peak * (n + 2) / 2`.
+    pub ratio_peak: f64,
+}
+
+/// Wall time of one mode's runs, summed over the sweep.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ModeTiming {
+    /// The mode.
+    pub mode: Option<Mode>,
+    /// Runs.
+    pub runs: usize,
+    /// Photons emitted, all runs.
+    pub emitted: u64,
+    /// Seconds tracing.
+    pub trace_s: f64,
+    /// Seconds building both kd-trees.
+    pub build_s: f64,
+    /// Seconds evaluating densities.
+    pub measure_s: f64,
+}
+
+/// Everything a sweep measured.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CornellResults {
+    /// `N_MAX`.
+    pub n_max: u64,
+    /// The seed.
+    pub seed: u64,
+    /// The estimator of the adaptive runs.
+    pub estimator: String,
+    /// The bounce limit.
+    pub max_depth: u32,
+    /// The modes, in order.
+    pub modes: Vec<Mode>,
+    /// The exponents, in order.
+    pub n_values: Vec<f64>,
+    /// The classic run with a diffuse light.
+    pub reference: RunMetrics,
+    /// Every run, `n` major, modes in the configured order.
+    pub runs: Vec<RunMetrics>,
+    /// `alpha_D` per `n`, both estimators.
+    pub alpha: Vec<AlphaRow>,
+    /// Seconds of the directionality analyses of both estimators.
+    pub analysis_s: f64,
+    /// Time per mode (the reference is counted under classic).
+    pub timing: Vec<ModeTiming>,
+    /// Traces actually made.
+    pub traces: usize,
+    /// Wall time of the whole sweep.
+    pub elapsed_s: f64,
+}
+
+impl CornellResults {
+    /// Fig. 7a's reference line: the reference run's primary max density.
+    pub fn reference_max_density(&self) -> f64 {
+        self.reference.max_density_primary
+    }
+
+    /// Fig. 9a's reference: the reference run's full-map sigma.
+    pub fn reference_sigma_density(&self) -> f64 {
+        self.reference.sigma_density
+    }
+
+    /// The run of `mode` at the `i`-th exponent of the sweep.
+    pub fn run(&self, i: usize, mode: Mode) -> Option<&RunMetrics> {
+        let m = self.modes.iter().position(|&x| x == mode)?;
+        self.runs.get(i * self.modes.len() + m)
+    }
+
+    /// The runs of one mode, in sweep order.
+    pub fn mode_runs(&self, mode: Mode) -> Vec<&RunMetrics> {
+        (0..self.n_values.len())
+            .filter_map(|i| self.run(i, mode))
+            .collect()
+    }
+
+    /// Photons emitted by every trace made.
+    pub fn photons_emitted(&self) -> u64 {
+        self.timing.iter().map(|t| t.emitted).sum()
+    }
+}
+
+/// Where a sweep is, for a progress bar.
+#[derive(Clone, Copy, Debug)]
+pub struct SweepProgress {
+    /// Traces finished.
+    pub done: usize,
+    /// Traces in the sweep.
+    pub total: usize,
+    /// Exponent of the run under way.
+    pub n: f64,
+    /// Mode of the run under way.
+    pub mode: Mode,
+}
+
+fn alpha_rows(n_values: &[f64], params: &AnalysisParams) -> Result<Vec<AlphaRow>> {
+    n_values
+        .par_iter()
+        .map(|&n| {
+            let e = CosN::new(n as f32)?;
+            let paper = analyze_emitter(&e, Estimator::Paper, params)?.alpha_d as f64;
+            let peak = analyze_emitter(&e, Estimator::PeakDensity, params)?.alpha_d as f64;
+            let k = (n + 2.0) / 2.0;
+            Ok(AlphaRow {
+                n,
+                alpha_d_paper: paper,
+                alpha_d_peak: peak,
+                ratio_paper: paper * k,
+                ratio_peak: peak * k,
+            })
+        })
+        .collect()
+}
+
+/// One trace, its maps and their densities.
+fn run_one(
+    tracer: &mut Tracer<'_>,
+    cfg: &TraceConfig,
+    n: f64,
+    points: &[SurfacePoint],
+    alpha: &AlphaRow,
+) -> Result<RunMetrics> {
+    let out = tracer.trace(cfg)?;
+    let maps = Maps::build(&out.records);
+    drop(out.records);
+    let t = Instant::now();
+    let m = measure(&maps, points);
+    let measure_s = t.elapsed().as_secs_f64();
+    let r = out.report;
+    let alpha_d = out.plans.first().map_or(1.0, |p| p.alpha_d as f64);
+    Ok(RunMetrics {
+        n,
+        mode: cfg.mode,
+        n_max: r.n_max,
+        emitted: r.emitted,
+        stored: r.stored,
+        stored_primary: r.stored_primary,
+        reemitted_first_hit: r.reemitted_first_hit,
+        split_rate_by_depth: r.split_rate_by_depth,
+        hits_by_depth: r.depths.iter().map(|d| d.hits).collect(),
+        max_density_primary: m.primary.max,
+        mean_density_primary: m.primary.mean,
+        sigma_density_primary: m.primary.sigma,
+        sigma_over_mean_primary: m.primary.sigma_over_mean,
+        max_density: m.full.max,
+        mean_density: m.full.mean,
+        sigma_density: m.full.sigma,
+        sigma_over_mean: m.full.sigma_over_mean,
+        trace_s: r.trace_s,
+        trace_primary_s: r.trace_primary_s,
+        build_s: maps.build_s,
+        build_primary_s: maps.build_primary_s,
+        primary_map_time_s: r.trace_primary_s + maps.build_primary_s,
+        measure_s,
+        budget_bound: r.budget_bound,
+        capped_hits: r.capped_hits,
+        density_rejected: r.density_rejected,
+        alpha_d,
+        alpha_d_paper: alpha.alpha_d_paper,
+        alpha_d_peak: alpha.alpha_d_peak,
+    })
+}
+
+/// Runs the sweep on the current rayon pool (wrap it in `pool.install` to
+/// choose the threads). `progress` is called before each trace and once at the end.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for a bad configuration, and whatever the
+/// engine or Embree reports.
+pub fn run_cornell(
+    cfg: &CornellConfig,
+    progress: &dyn Fn(SweepProgress),
+) -> Result<CornellResults> {
+    cfg.validate()?;
+    let start = Instant::now();
+    let params = AnalysisParams::default();
+    let t = Instant::now();
+    let mut alpha_ns = cfg.n_values.clone();
+    alpha_ns.push(0.0);
+    let mut alpha = alpha_rows(&alpha_ns, &params)?;
+    let alpha_ref = alpha
+        .pop()
+        .ok_or_else(|| Error::param("n sweep", "empty"))?;
+    let analysis_s = t.elapsed().as_secs_f64();
+
+    let mut scene = Scene::cornell()?;
+    let device = Device::new()?;
+    let rt = scene.commit(&device)?;
+    let points = scene
+        .surface_sampler()
+        .points(DENSITY_POINTS, DENSITY_POINTS_SEED);
+    let total = cfg.run_count();
+    let mut done = 0usize;
+    let mut timed = cfg.modes.clone();
+    if !timed.contains(&Mode::Classic) {
+        timed.push(Mode::Classic);
+    }
+    let mut timing: Vec<ModeTiming> = timed
+        .iter()
+        .map(|&m| ModeTiming {
+            mode: Some(m),
+            ..ModeTiming::default()
+        })
+        .collect();
+    let mut account = |r: &RunMetrics| {
+        if let Some(t) = timing.iter_mut().find(|t| t.mode == Some(r.mode)) {
+            t.runs += 1;
+            t.emitted += r.emitted;
+            t.trace_s += r.trace_s;
+            t.build_s += r.build_s + r.build_primary_s;
+            t.measure_s += r.measure_s;
+        }
+    };
+
+    progress(SweepProgress {
+        done,
+        total,
+        n: 0.0,
+        mode: Mode::Classic,
+    });
+    scene.set_cosn(CosN::new(0.0)?);
+    let reference = run_one(
+        &mut Tracer::new(&scene, &rt),
+        &cfg.trace_config(Mode::Classic),
+        0.0,
+        &points,
+        &alpha_ref,
+    )?;
+    account(&reference);
+    done += 1;
+    let mut density_cfg = cfg.trace_config(Mode::Density);
+    // A diffuse classic run that stored nothing (N_MAX = 0) leaves no target:
+    // density control then falls back to its automatic one.
+    if reference.mean_density > 0.0 && reference.mean_density.is_finite() {
+        density_cfg.density_target = DensityTarget::PerArea(reference.mean_density);
+    }
+
+    let mut runs = Vec::with_capacity(cfg.n_values.len() * cfg.modes.len());
+    for (&n, a) in cfg.n_values.iter().zip(&alpha) {
+        scene.set_cosn(CosN::new(n as f32)?);
+        let mut tracer = Tracer::new(&scene, &rt);
+        for &mode in &cfg.modes {
+            if mode == Mode::Classic && n == 0.0 {
+                runs.push(reference.clone());
+                continue;
+            }
+            progress(SweepProgress {
+                done,
+                total,
+                n,
+                mode,
+            });
+            let tc = match mode {
+                Mode::Density => density_cfg.clone(),
+                m => cfg.trace_config(m),
+            };
+            let r = run_one(&mut tracer, &tc, n, &points, a)?;
+            account(&r);
+            runs.push(r);
+            done += 1;
+        }
+    }
+    progress(SweepProgress {
+        done,
+        total,
+        n: cfg.n_values.last().copied().unwrap_or(0.0),
+        mode: cfg.modes.last().copied().unwrap_or(Mode::Classic),
+    });
+    Ok(CornellResults {
+        n_max: cfg.n_max,
+        seed: cfg.seed,
+        estimator: cfg.estimator.to_string(),
+        max_depth: cfg.max_depth,
+        modes: cfg.modes.clone(),
+        n_values: cfg.n_values.clone(),
+        reference,
+        runs,
+        alpha,
+        analysis_s,
+        timing,
+        traces: done,
+        elapsed_s: start.elapsed().as_secs_f64(),
+    })
+}
