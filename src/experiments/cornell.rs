@@ -11,9 +11,15 @@
 //!   [`Maps::build`] builds the primary-only and the full kd-tree.
 //! - **Same evaluation points** for every run: only the light's exponent changes
 //!   between runs, not the geometry, so the points are drawn once.
-//! - **Reuse**: one Embree device and committed scene for the whole sweep, one
-//!   [`Tracer`] per `n` (the scene it borrows changes with `n`), every trace on
-//!   the caller's rayon pool.
+//! - **Reuse**: one Embree device and committed scene for the whole sweep (the
+//!   geometry does not change with `n`), one [`Tracer`] per `n` (the scene it
+//!   borrows does).
+//! - **Runs in parallel, each on one thread**: the caller's pool size sets how
+//!   many workers there are; each worker takes the next `n` and runs its modes
+//!   on a one-thread pool of its own. Runs are independent, so this scales
+//!   even for density control's sequential pass, and every time reported is a
+//!   one-thread time, untouched by work stealing between runs. Results do not
+//!   depend on the worker count (the engine is thread-count independent).
 //! - **Both directionality estimators**: the run uses the configured one; the
 //!   other's `alpha_D` is computed too (the analysis alone, no trace) so that
 //!   `alpha_D(n) (n + 2) / 2` is reported for both ([`AlphaRow`]).
@@ -26,6 +32,8 @@ use crate::engine::{measure, Budget, DensityTarget, Maps, Mode, TraceConfig, Tra
 use crate::error::{Error, Result};
 use crate::scene::{Scene, SurfacePoint};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// What the sweep runs.
@@ -335,15 +343,16 @@ fn run_one(
     })
 }
 
-/// Runs the sweep on the current rayon pool (wrap it in `pool.install` to
-/// choose the threads). `progress` is called before each trace and once at the end.
+/// Runs the sweep with as many workers as the current rayon pool has threads
+/// (wrap it in `pool.install` to choose). `progress` is called as traces
+/// finish, from the worker threads.
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] for a bad configuration, and whatever the
 /// engine or Embree reports.
 pub fn run_cornell(
     cfg: &CornellConfig,
-    progress: &dyn Fn(SweepProgress),
+    progress: &(dyn Fn(SweepProgress) + Sync),
 ) -> Result<CornellResults> {
     cfg.validate()?;
     let start = Instant::now();
@@ -364,7 +373,6 @@ pub fn run_cornell(
         .surface_sampler()
         .points(DENSITY_POINTS, DENSITY_POINTS_SEED);
     let total = cfg.run_count();
-    let mut done = 0usize;
     let mut timed = cfg.modes.clone();
     if !timed.contains(&Mode::Classic) {
         timed.push(Mode::Classic);
@@ -376,7 +384,7 @@ pub fn run_cornell(
             ..ModeTiming::default()
         })
         .collect();
-    let mut account = |r: &RunMetrics| {
+    let account = |timing: &mut Vec<ModeTiming>, r: &RunMetrics| {
         if let Some(t) = timing.iter_mut().find(|t| t.mode == Some(r.mode)) {
             t.runs += 1;
             t.emitted += r.emitted;
@@ -387,21 +395,28 @@ pub fn run_cornell(
     };
 
     progress(SweepProgress {
-        done,
+        done: 0,
         total,
         n: 0.0,
         mode: Mode::Classic,
     });
+    let workers = rayon::current_num_threads().max(1);
+    let one_thread = crate::embree::thread_pool(1)?;
+    let pools = (0..workers)
+        .map(|_| crate::embree::thread_pool(1))
+        .collect::<Result<Vec<_>>>()?;
     scene.set_cosn(CosN::new(0.0)?);
-    let reference = run_one(
-        &mut Tracer::new(&scene, &rt),
-        &cfg.trace_config(Mode::Classic),
-        0.0,
-        &points,
-        &alpha_ref,
-    )?;
-    account(&reference);
-    done += 1;
+    let reference = one_thread.install(|| {
+        run_one(
+            &mut Tracer::new(&scene, &rt),
+            &cfg.trace_config(Mode::Classic),
+            0.0,
+            &points,
+            &alpha_ref,
+        )
+    })?;
+    account(&mut timing, &reference);
+    let done = AtomicUsize::new(1);
     let mut density_cfg = cfg.trace_config(Mode::Density);
     // A diffuse classic run that stored nothing (N_MAX = 0) leaves no target:
     // density control then falls back to its automatic one.
@@ -409,31 +424,73 @@ pub fn run_cornell(
         density_cfg.density_target = DensityTarget::PerArea(reference.mean_density);
     }
 
-    let mut runs = Vec::with_capacity(cfg.n_values.len() * cfg.modes.len());
-    for (&n, a) in cfg.n_values.iter().zip(&alpha) {
+    // Every run at one n, in mode order, on the calling thread's pool.
+    let runs_at = |scene: &mut Scene, n: f64, a: &AlphaRow| -> Result<Vec<RunMetrics>> {
         scene.set_cosn(CosN::new(n as f32)?);
-        let mut tracer = Tracer::new(&scene, &rt);
+        let mut tracer = Tracer::new(scene, &rt);
+        let mut out = Vec::with_capacity(cfg.modes.len());
         for &mode in &cfg.modes {
             if mode == Mode::Classic && n == 0.0 {
-                runs.push(reference.clone());
+                out.push(reference.clone());
                 continue;
             }
-            progress(SweepProgress {
-                done,
-                total,
-                n,
-                mode,
-            });
             let tc = match mode {
                 Mode::Density => density_cfg.clone(),
                 m => cfg.trace_config(m),
             };
-            let r = run_one(&mut tracer, &tc, n, &points, a)?;
-            account(&r);
-            runs.push(r);
-            done += 1;
+            out.push(run_one(&mut tracer, &tc, n, &points, a)?);
+            progress(SweepProgress {
+                done: done.fetch_add(1, Ordering::Relaxed) + 1,
+                total,
+                n,
+                mode,
+            });
+        }
+        Ok(out)
+    };
+    let next = AtomicUsize::new(0);
+    let failed = AtomicBool::new(false);
+    let slots: Vec<Mutex<Option<Result<Vec<RunMetrics>>>>> =
+        cfg.n_values.iter().map(|_| Mutex::new(None)).collect();
+    std::thread::scope(|s| {
+        for pool in &pools {
+            s.spawn(|| {
+                let mut scene = scene.clone();
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    if i >= cfg.n_values.len() || failed.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let r = pool.install(|| runs_at(&mut scene, cfg.n_values[i], &alpha[i]));
+                    failed.fetch_or(r.is_err(), Ordering::Relaxed);
+                    if let Ok(mut slot) = slots[i].lock() {
+                        *slot = Some(r);
+                    }
+                }
+            });
+        }
+    });
+    let mut runs = Vec::with_capacity(cfg.n_values.len() * cfg.modes.len());
+    let mut first_error = None;
+    for slot in slots {
+        match slot.into_inner().ok().flatten() {
+            Some(Ok(r)) => runs.extend(r),
+            Some(Err(e)) => {
+                first_error.get_or_insert(e);
+            }
+            // Skipped after another run failed.
+            None => {}
         }
     }
+    if let Some(e) = first_error {
+        return Err(e);
+    }
+    for r in &runs {
+        if !(r.mode == Mode::Classic && r.n == 0.0) {
+            account(&mut timing, r);
+        }
+    }
+    let done = done.into_inner();
     progress(SweepProgress {
         done,
         total,

@@ -41,7 +41,12 @@ pub fn density_at_facing(
     k: usize,
     scratch: &mut Vec<Neighbor>,
 ) -> f32 {
-    map.nearest_k_facing(p, normal, k, f32::INFINITY, scratch);
+    if normal == Vec3::ZERO {
+        // No side test: the plain search skips decoding every direction.
+        map.nearest_k(p, k, f32::INFINITY, scratch);
+    } else {
+        map.nearest_k_facing(p, normal, k, f32::INFINITY, scratch);
+    }
     let Some(last) = scratch.last() else {
         return 0.0;
     };
