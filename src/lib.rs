@@ -14,6 +14,7 @@ pub mod emitter;
 pub mod engine;
 pub mod error;
 pub mod photon_map;
+pub mod render;
 pub mod rng;
 pub mod sampling;
 pub mod scene;
