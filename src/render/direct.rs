@@ -67,14 +67,13 @@ fn light_sample(light: &Light, x: Vec3, rng: &mut Rng) -> Option<(Vec3, Vec3)> {
 }
 
 /// Direct radiance leaving `x` towards `wo` (world, unit) on the side of the
-/// unit normal `n`: one sample of every light, shadow rays from `x + eps n`.
+/// unit normal `n` (`[x, n, wo]`): one sample of every light, shadow rays
+/// from `x + eps n`.
 pub(crate) fn direct_radiance(
     scene: &Scene,
     rt: &CommittedScene,
     brdf: &Brdf,
-    x: Vec3,
-    n: Vec3,
-    wo: Vec3,
+    [x, n, wo]: [Vec3; 3],
     eps: f32,
     rng: &mut Rng,
 ) -> Vec3 {
@@ -117,7 +116,10 @@ pub fn quadrature_irradiance(
     let grid = grid.max(1);
     let eps = super::ray_epsilon(scene);
     let origin = x + n * eps;
-    let visible = |p: Vec3| rt.is_none_or(|rt| !rt.occluded(&Ray::segment(origin, p, SHADOW_EPS)));
+    let visible = |p: Vec3| match rt {
+        Some(rt) => !rt.occluded(&Ray::segment(origin, p, SHADOW_EPS)),
+        None => true,
+    };
     let mut e = Vec3::ZERO;
     for light in &scene.lights {
         match light {

@@ -23,6 +23,7 @@ struct Ctx<'a> {
     gather: u32,
     lookup: Lookup,
     eps: f32,
+    show_emitters: bool,
 }
 
 /// A non-delta hit reached through zero or more mirrors.
@@ -53,12 +54,11 @@ impl<'a> Ctx<'a> {
     }
 
     /// Follows `ray` through mirrors to its first non-delta hit. Emission seen
-    /// on the way (after `skip_first_emission` is honoured for the first hit)
-    /// is added to `emitted`.
+    /// at hit `first_emission` (0 = the first hit) and later is added to `emitted`.
     fn trace(
         &self,
         mut ray: Ray,
-        skip_first_emission: bool,
+        first_emission: u32,
         rng: &mut Rng,
         emitted: &mut Vec3,
     ) -> Option<SurfaceHit<'a>> {
@@ -70,7 +70,7 @@ impl<'a> Ctx<'a> {
             let wo = -dir;
             let position = ray.at(h.t);
             let normal = if h.ng.dot(dir) > 0.0 { -h.ng } else { h.ng };
-            if bounce > 0 || !skip_first_emission {
+            if bounce >= first_emission {
                 *emitted += throughput * Self::emitted(material, &h, wo);
             }
             if !material.brdf.is_delta() {
@@ -130,7 +130,7 @@ impl<'a> Ctx<'a> {
             // Emission straight from a light was counted by light sampling;
             // after a mirror it is a caustic only the gather finds.
             let mut emitted = Vec3::ZERO;
-            if let Some(y) = self.trace(ray, true, rng, &mut emitted) {
+            if let Some(y) = self.trace(ray, 1, rng, &mut emitted) {
                 sum += bs.weight * y.throughput * self.estimate(&maps.full, &y, scratch);
             }
             sum += bs.weight * emitted;
@@ -140,7 +140,8 @@ impl<'a> Ctx<'a> {
 
     fn radiance(&self, ray: Ray, rng: &mut Rng, scratch: &mut Vec<Neighbor>) -> Vec3 {
         let mut l = Vec3::ZERO;
-        let Some(s) = self.trace(ray, false, rng, &mut l) else {
+        let first = if self.show_emitters { 0 } else { u32::MAX };
+        let Some(s) = self.trace(ray, first, rng, &mut l) else {
             return l;
         };
         let direct = |rng: &mut Rng| {
@@ -148,9 +149,7 @@ impl<'a> Ctx<'a> {
                 self.scene,
                 self.rt,
                 &s.material.brdf,
-                s.position,
-                s.normal,
-                s.wo,
+                [s.position, s.normal, s.wo],
                 self.eps,
                 rng,
             )
@@ -209,6 +208,7 @@ pub fn render(
             max_radius: cfg.max_radius.unwrap_or_else(|| default_max_radius(scene)),
         },
         eps: ray_epsilon(scene),
+        show_emitters: cfg.show_emitters,
     };
     let width = cfg.width as usize;
     let rows = cfg.height as u64;

@@ -134,6 +134,11 @@ pub struct RenderConfig {
     pub seed: u64,
     /// The camera; `None` is the scene's camera, else [`Camera::cornell`].
     pub camera: Option<Camera>,
+    /// Show the emission of emitters the camera sees (directly or in mirrors).
+    /// Error measurements turn it off: the emission is exact and the same in
+    /// every mode, but the aliasing of a bright light's edges would dominate
+    /// an image RMSE.
+    pub show_emitters: bool,
 }
 
 impl RenderConfig {
@@ -149,6 +154,7 @@ impl RenderConfig {
             view: View::Full,
             seed: 1,
             camera: None,
+            show_emitters: true,
         }
     }
 
