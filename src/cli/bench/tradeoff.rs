@@ -502,6 +502,8 @@ fn plot(path: &Path, scene: &str, rows: &[Row], reference_noise: f64) -> anyhow:
         .configure_mesh()
         .x_desc("trace + kd-trees + render (s)")
         .y_desc("relative RMSE vs reference")
+        .x_label_formatter(&|v| format!("{v:.3}"))
+        .y_label_formatter(&|v| format!("{v:.3}"))
         .draw()
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     let colors = [
