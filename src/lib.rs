@@ -15,6 +15,7 @@ pub mod engine;
 pub mod error;
 pub mod experiments;
 pub mod photon_map;
+pub mod render;
 pub mod rng;
 pub mod sampling;
 pub mod scene;

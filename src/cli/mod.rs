@@ -3,6 +3,7 @@
 pub mod analyze;
 pub mod bench;
 pub mod common;
+pub mod render;
 pub mod scene;
 pub mod trace;
 
@@ -24,6 +25,8 @@ pub enum Command {
     Scene(scene::SceneArgs),
     /// Trace photons in one mode and report counts, density statistics and timings.
     Trace(trace::TraceArgs),
+    /// Render an image: direct light by light sampling, indirect light from the photon map.
+    Render(render::RenderArgs),
     /// Benchmarks: ray throughput, the paper's Cornell experiments, the speed/accuracy trade.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -34,6 +37,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Analyze(a) => analyze::run(a),
         Command::Scene(a) => scene::run(a),
         Command::Trace(a) => trace::run(a),
+        Command::Render(a) => render::run(a),
         Command::Bench(c) => bench::run(c),
     }
 }

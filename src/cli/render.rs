@@ -1,0 +1,167 @@
+//! `adaptive-pm render <SCENE> --mode M (--quality Q | --n-max N) --out image.exr`:
+//! trace photons, build the maps, render an image (see `adaptive_pm::render`).
+
+use super::common::{open_scene, progress_bar, BudgetArgs, ThreadArgs};
+use adaptive_pm::embree::Device;
+use adaptive_pm::engine::{Mode, Tracer};
+use adaptive_pm::render::{
+    check_output_path, render, RenderConfig, RenderMaps, ToneMap, View, DEFAULT_K,
+};
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `render`.
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// A glTF file (.gltf or .glb), or `cornell` for the built-in Cornell box.
+    pub scene: String,
+    /// classic (Markov chains), density (density control) or adaptive (the paper).
+    #[arg(long, default_value = "adaptive")]
+    pub mode: Mode,
+    #[command(flatten)]
+    pub budget: BudgetArgs,
+    #[command(flatten)]
+    pub threads: ThreadArgs,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 4)]
+    pub spp: u32,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 256)]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 256)]
+    pub height: u32,
+    /// Final-gather rays per hit (0: read the indirect map at the first hit).
+    #[arg(long, default_value_t = 0)]
+    pub final_gather: u32,
+    /// Photons per radiance estimate.
+    #[arg(long, default_value_t = DEFAULT_K)]
+    pub k: usize,
+    /// Linear radiance, OpenEXR.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Also a tone-mapped sRGB preview (exposure, then Reinhard).
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Exposure of the PNG preview in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
+    /// Direct light only: no photons are traced.
+    #[arg(long, conflicts_with = "visualize_map")]
+    pub direct_only: bool,
+    /// Show the map's radiance estimate at the first hit (no light sampling, no gather).
+    #[arg(long)]
+    pub visualize_map: bool,
+    /// With --visualize-map: depth-0 photons only (the paper's primary map).
+    #[arg(long, requires = "visualize_map")]
+    pub primary_only: bool,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: RenderArgs) -> anyhow::Result<()> {
+    let scene = open_scene(&args.scene, args.budget.cosn)?;
+    let trace_cfg = args.budget.config(args.mode)?;
+    let view = if args.direct_only {
+        View::DirectOnly
+    } else if args.visualize_map {
+        View::Map {
+            primary_only: args.primary_only,
+        }
+    } else {
+        View::Full
+    };
+    let mut cfg = RenderConfig::new(args.width, args.height);
+    cfg.spp = args.spp;
+    cfg.final_gather = args.final_gather;
+    cfg.k = args.k;
+    cfg.view = view;
+    cfg.seed = args.budget.seed;
+    // Fail before any work: bad sizes, a missing folder, an unwritable path.
+    cfg.validate()?;
+    check_output_path(&args.out)?;
+    if let Some(p) = &args.png {
+        check_output_path(p)?;
+    }
+    let pool = args.threads.pool()?;
+    let device = Device::new()?;
+    let rt = scene.commit(&device)?;
+    let bar = progress_bar(!args.json);
+    let (maps, trace_s, photons) = if view == View::DirectOnly {
+        (None, 0.0, 0)
+    } else {
+        let t = Instant::now();
+        let mut tracer = Tracer::new(&scene, &rt);
+        let out = pool.install(|| {
+            tracer.trace_with_progress(&trace_cfg, &|p| {
+                bar.set_length(p.total);
+                bar.set_position(p.done);
+                bar.set_message(format!("depth {}", p.depth));
+            })
+        })?;
+        let maps = pool.install(|| RenderMaps::build(&out.records));
+        (Some(maps), t.elapsed().as_secs_f64(), out.records.len())
+    };
+    bar.set_position(0);
+    bar.set_length(args.height as u64);
+    bar.set_message("render");
+    let t = Instant::now();
+    let image = pool.install(|| {
+        render(&scene, &rt, maps.as_ref(), &cfg, &|done, _| {
+            bar.set_position(done)
+        })
+    })?;
+    let render_s = t.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    image.write_exr(&args.out)?;
+    if let Some(p) = &args.png {
+        image.write_png(
+            p,
+            ToneMap {
+                exposure: args.exposure,
+            },
+        )?;
+    }
+    let mean = image.mean();
+    if args.json {
+        println!(
+            "{}",
+            json!({
+                "scene": args.scene,
+                "mode": args.mode.name(),
+                "view": format!("{view:?}"),
+                "width": args.width,
+                "height": args.height,
+                "spp": args.spp,
+                "final_gather": args.final_gather,
+                "k": args.k,
+                "photons": photons,
+                "trace_s": trace_s,
+                "render_s": render_s,
+                "mean_rgb": [mean.x, mean.y, mean.z],
+                "out": args.out,
+            })
+        );
+    } else {
+        println!(
+            "{} on {}: {} photons, trace + kd-trees {:.3} s, render {:.3} s ({}x{}, {} spp, gather {})",
+            args.mode.name(),
+            args.scene,
+            photons,
+            trace_s,
+            render_s,
+            args.width,
+            args.height,
+            args.spp,
+            args.final_gather
+        );
+        println!("mean RGB {:.4} {:.4} {:.4}", mean.x, mean.y, mean.z);
+        println!("wrote {}", args.out.display());
+        if let Some(p) = &args.png {
+            println!("wrote {}", p.display());
+        }
+    }
+    Ok(())
+}

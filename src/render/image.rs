@@ -1,0 +1,249 @@
+//! Images in memory and on disk.
+//!
+//! - OpenEXR: linear RGB radiance, 32-bit float, no alpha ([`Image::write_exr`]).
+//! - PNG preview: 8-bit sRGB after a tone map ([`ToneMap`]): the radiance is
+//!   scaled by `2^exposure`, then Reinhard's `c / (1 + c)` per channel, then the
+//!   sRGB transfer curve. Documented and simple, not a film emulation.
+//! - Files are written to a temporary name in the same folder and renamed, so
+//!   a partial image never sits under the final name.
+//! - Sizes: each side in `1..=`[`MAX_DIMENSION`], and the pixel buffer within a
+//!   quarter of the available memory.
+
+use crate::engine::config::available_memory;
+use crate::error::{Error, Result};
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+
+/// Largest width or height accepted.
+pub const MAX_DIMENSION: u32 = 16384;
+
+/// Checks an image size.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for a zero side, a side above [`MAX_DIMENSION`],
+/// or a pixel buffer larger than a quarter of the available memory.
+pub fn check_dimensions(width: u32, height: u32) -> Result<()> {
+    for (name, v) in [("width", width), ("height", height)] {
+        if v == 0 || v > MAX_DIMENSION {
+            return Err(Error::param(
+                name,
+                format!("must be in 1..={MAX_DIMENSION} pixels, got {v}"),
+            ));
+        }
+    }
+    // The RGB buffer plus the EXR writer's copy.
+    let bytes = width as u64 * height as u64 * 12 * 2;
+    let allowed = available_memory() / 4;
+    if bytes > allowed {
+        return Err(Error::param(
+            "width",
+            format!(
+                "{width} x {height} pixels need {bytes} bytes, more than a quarter of the \
+                 available memory ({allowed} bytes)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Linear RGB pixels, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height` pixels.
+    pub pixels: Vec<Vec3>,
+}
+
+/// The PNG tone map: `2^exposure` scale, Reinhard per channel, sRGB.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToneMap {
+    /// Exposure in stops.
+    pub exposure: f32,
+}
+
+impl Default for ToneMap {
+    fn default() -> Self {
+        ToneMap { exposure: 0.0 }
+    }
+}
+
+impl ToneMap {
+    /// One linear channel to an 8-bit sRGB value.
+    pub fn apply(&self, c: f32) -> u8 {
+        let c = if c.is_finite() { c.max(0.0) } else { 0.0 };
+        let c = c * self.exposure.exp2();
+        let c = c / (1.0 + c);
+        let s = if c <= 0.003_130_8 {
+            12.92 * c
+        } else {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0 + 0.5).clamp(0.0, 255.0) as u8
+    }
+}
+
+fn io_err(path: &Path, source: std::io::Error) -> Error {
+    Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Checks that `path` can receive a file: its folder exists, it is not a
+/// folder, and a file can be created beside it (tried and removed).
+///
+/// # Errors
+/// [`Error::Io`] saying which.
+pub fn check_output_path(path: &Path) -> Result<()> {
+    let parent = parent_of(path);
+    if !parent.is_dir() {
+        return Err(io_err(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                format!("the output folder {} does not exist", parent.display()),
+            ),
+        ));
+    }
+    if path.is_dir() {
+        return Err(io_err(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "the output path is a folder",
+            ),
+        ));
+    }
+    let tmp = temp_path(path);
+    std::fs::File::create(&tmp).map_err(|e| io_err(path, e))?;
+    let _ = std::fs::remove_file(&tmp);
+    Ok(())
+}
+
+fn parent_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// `.NAME.tmp-PID` beside `path`.
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "image".into());
+    parent_of(path).join(format!(".{name}.tmp-{}", std::process::id()))
+}
+
+/// Writes through `write` to a temporary file, then renames it to `path`; the
+/// temporary file is removed on failure.
+fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> std::io::Result<()>) -> Result<()> {
+    check_output_path(path)?;
+    let tmp = temp_path(path);
+    let done = write(&tmp).and_then(|()| std::fs::rename(&tmp, path));
+    if let Err(e) = done {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io_err(path, e));
+    }
+    Ok(())
+}
+
+fn exr_io(e: exr::error::Error) -> std::io::Error {
+    match e {
+        exr::error::Error::Io(e) => e,
+        other => std::io::Error::other(other.to_string()),
+    }
+}
+
+impl Image {
+    /// A black image.
+    ///
+    /// # Errors
+    /// As [`check_dimensions`].
+    pub fn new(width: u32, height: u32) -> Result<Self> {
+        check_dimensions(width, height)?;
+        Ok(Image {
+            width,
+            height,
+            pixels: vec![Vec3::ZERO; width as usize * height as usize],
+        })
+    }
+
+    /// The pixel at column `x`, row `y` (row 0 at the top).
+    pub fn pixel(&self, x: u32, y: u32) -> Vec3 {
+        self.pixels[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Mean RGB over the pixels.
+    pub fn mean(&self) -> Vec3 {
+        let s = self.pixels.iter().fold([0f64; 3], |a, p| {
+            [a[0] + p.x as f64, a[1] + p.y as f64, a[2] + p.z as f64]
+        });
+        let n = self.pixels.len().max(1) as f64;
+        Vec3::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
+    }
+
+    /// Writes linear RGB as a 32-bit float OpenEXR file (temporary name, then rename).
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the folder is missing or the file cannot be written.
+    pub fn write_exr(&self, path: impl AsRef<Path>) -> Result<()> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        write_atomic(path.as_ref(), |tmp| {
+            exr::prelude::write_rgb_file(tmp, w, h, |x, y| {
+                let p = self.pixels[y * w + x];
+                (p.x, p.y, p.z)
+            })
+            .map_err(exr_io)
+        })
+    }
+
+    /// Reads the first RGB(A) layer of an OpenEXR file (alpha dropped).
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the file is missing or not a readable EXR image.
+    pub fn read_exr(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let img = exr::prelude::read_first_rgba_layer_from_file(
+            path,
+            |res, _| (res.width(), vec![Vec3::ZERO; res.width() * res.height()]),
+            |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                px[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .map_err(|e| io_err(path, exr_io(e)))?;
+        let size = img.layer_data.size;
+        let (_, pixels) = img.layer_data.channel_data.pixels;
+        Ok(Image {
+            width: size.width() as u32,
+            height: size.height() as u32,
+            pixels,
+        })
+    }
+
+    /// Writes an 8-bit sRGB PNG after `tone` (temporary name, then rename).
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the folder is missing or the file cannot be written.
+    pub fn write_png(&self, path: impl AsRef<Path>, tone: ToneMap) -> Result<()> {
+        let data: Vec<u8> = self
+            .pixels
+            .iter()
+            .flat_map(|p| [tone.apply(p.x), tone.apply(p.y), tone.apply(p.z)])
+            .collect();
+        write_atomic(path.as_ref(), |tmp| {
+            let file = std::io::BufWriter::new(std::fs::File::create(tmp)?);
+            let mut enc = png::Encoder::new(file, self.width, self.height);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+            let mut w = enc.write_header().map_err(std::io::Error::other)?;
+            w.write_image_data(&data).map_err(std::io::Error::other)?;
+            w.finish().map_err(std::io::Error::other)
+        })
+    }
+}

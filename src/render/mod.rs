@@ -1,0 +1,238 @@
+//! Images from the photon map: a pinhole camera, direct light by sampling the
+//! emitters, indirect light from the photon map, optional final gather, and
+//! the image files (OpenEXR, tone-mapped PNG).
+//!
+//! ```no_run
+//! use adaptive_pm::embree::Device;
+//! use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
+//! use adaptive_pm::render::{render, RenderConfig, RenderMaps};
+//! use adaptive_pm::scene::Scene;
+//!
+//! let scene = Scene::cornell()?;
+//! let device = Device::new()?;
+//! let rt = scene.commit(&device)?;
+//! let run = Tracer::new(&scene, &rt).trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000)))?;
+//! let maps = RenderMaps::build(&run.records);
+//! let cfg = RenderConfig::new(64, 64);
+//! let image = render(&scene, &rt, Some(&maps), &cfg, &|_, _| {})?;
+//! image.write_exr("cornell.exr")?;
+//! # Ok::<(), adaptive_pm::Error>(())
+//! ```
+//!
+//! # The estimator ([`View::Full`])
+//! A camera ray follows perfect mirrors (at most [`MAX_SPECULAR`] bounces) to
+//! its first non-delta hit `x`. The pixel's radiance is
+//! - the emission of an emitter the (possibly mirrored) ray reaches, `L0 cos^n`;
+//! - **direct light** at `x`: one sample per light and pixel sample (area
+//!   lights: an area-uniform point, the `cos^n` radiance, a shadow ray;
+//!   point and spot lights: their intensity over `r^2` and a shadow ray);
+//! - **indirect light** at `x`, either
+//!   - without final gather: the radiance estimate of the photons stored at
+//!     depth >= 1 (the **indirect map**). Depth-0 photons *are* the direct
+//!     light, already counted by light sampling; photons after a mirror
+//!     bounce have depth >= 1, so caustics come from the map too;
+//!   - with final gather (`G` rays): `G` BRDF-sampled rays from `x`, each
+//!     followed through mirrors to a non-delta hit `y`, where the **full map**
+//!     (all depths: the light leaving `y` includes its direct light) gives the
+//!     radiance. A gather ray that reaches an emitter after a mirror adds its
+//!     emission (a caustic path light sampling cannot find); one that reaches
+//!     an emitter straight away adds only the reflection there (the emission
+//!     was counted by light sampling).
+//!
+//! The split is exact: every light path `L ... x E` is counted once.
+//!
+//! # The radiance estimate ([`estimate`])
+//! The `k` nearest photons (default [`DEFAULT_K`]) that arrived on the shaded
+//! side of the surface, within `max_radius`; each weighted by the BRDF for its
+//! incident direction and by Jensen's **cone filter** `w = 1 - d / r`, whose
+//! normalisation is `pi r^2 / 3`. `r` is the distance to the k-th photon, or
+//! `max_radius` when fewer were found (then the estimate is a fixed-radius one).
+//!
+//! # Diagnostic views
+//! [`View::DirectOnly`]: emission and direct light, no map.
+//! [`View::Map`]: emission and the map's radiance estimate at the first
+//! non-delta hit, no light sampling, no gather: the full map, or with
+//! `primary_only` the depth-0 photons (the paper's primary map).
+//!
+//! # Determinism
+//! Pixel `p`'s sample `s` draws from `Rng::new(hash2(hash2(seed, p), s))`, so
+//! an image does not depend on the thread count or the tiling.
+//!
+//! # Rays
+//! Camera, shadow and gather rays go through [`CommittedScene::intersect`] /
+//! [`CommittedScene::occluded`] one at a time: the batched path's default
+//! kernel ([`crate::embree::DEFAULT_BATCH_KERNEL`]) is a loop of the same
+//! single-ray calls, so tiles of rays would only add bookkeeping.
+
+mod camera;
+pub mod direct;
+pub mod estimate;
+pub mod image;
+mod integrator;
+pub mod metrics;
+
+pub use camera::CameraRays;
+pub use direct::{floor_points, quadrature_irradiance};
+pub use estimate::{irradiance_default, irradiance_estimate, radiance_estimate, Estimate, Lookup};
+pub use image::{check_output_path, Image, ToneMap, MAX_DIMENSION};
+pub use integrator::render;
+pub use metrics::{relative_rmse, rmse};
+
+use crate::error::{Error, Result};
+use crate::photon_map::{PhotonMap, PhotonRecord};
+use crate::scene::{Camera, Scene};
+
+/// Default number of photons in a radiance estimate.
+pub const DEFAULT_K: usize = 100;
+
+/// Default search radius as a fraction of the scene's bounding-box diagonal:
+/// wide enough that only truly empty regions hit it.
+pub const DEFAULT_MAX_RADIUS_FRACTION: f32 = 0.1;
+
+/// Mirror bounces a camera or gather ray follows before it is dropped.
+pub const MAX_SPECULAR: u32 = 8;
+
+/// Most samples per pixel accepted.
+pub const MAX_SPP: u32 = 1 << 16;
+
+/// Most final-gather rays per hit accepted.
+pub const MAX_GATHER: u32 = 4096;
+
+/// What the image shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    /// Emission + direct light + indirect light from the map (or the gather).
+    Full,
+    /// Emission + direct light only; no photon map needed.
+    DirectOnly,
+    /// Emission + the map's radiance estimate at the first non-delta hit.
+    Map {
+        /// Use only the depth-0 photons (the paper's primary map).
+        primary_only: bool,
+    },
+}
+
+/// How to render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderConfig {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel (jittered positions; one light sample each).
+    pub spp: u32,
+    /// Final-gather rays per hit (0 = read the indirect map at the first hit).
+    pub final_gather: u32,
+    /// Photons per radiance estimate.
+    pub k: usize,
+    /// Largest search radius (world units); `None` is
+    /// [`DEFAULT_MAX_RADIUS_FRACTION`] of the scene's diagonal.
+    pub max_radius: Option<f32>,
+    /// What to show.
+    pub view: View,
+    /// Seed of the pixel samples.
+    pub seed: u64,
+    /// The camera; `None` is the scene's camera, else [`Camera::cornell`].
+    pub camera: Option<Camera>,
+    /// Show the emission of emitters the camera sees (directly or in mirrors).
+    /// Error measurements turn it off: the emission is exact and the same in
+    /// every mode, but the aliasing of a bright light's edges would dominate
+    /// an image RMSE.
+    pub show_emitters: bool,
+}
+
+impl RenderConfig {
+    /// A `width x height` full render, 1 sample per pixel, no gather, defaults elsewhere.
+    pub fn new(width: u32, height: u32) -> Self {
+        RenderConfig {
+            width,
+            height,
+            spp: 1,
+            final_gather: 0,
+            k: DEFAULT_K,
+            max_radius: None,
+            view: View::Full,
+            seed: 1,
+            camera: None,
+            show_emitters: true,
+        }
+    }
+
+    /// Checks the settings, including that the image fits in memory.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the first bad setting.
+    pub fn validate(&self) -> Result<()> {
+        image::check_dimensions(self.width, self.height)?;
+        if self.spp == 0 || self.spp > MAX_SPP {
+            return Err(Error::param(
+                "spp",
+                format!("must be in 1..={MAX_SPP}, got {}", self.spp),
+            ));
+        }
+        if self.final_gather > MAX_GATHER {
+            return Err(Error::param(
+                "final gather",
+                format!("must be at most {MAX_GATHER}, got {}", self.final_gather),
+            ));
+        }
+        if self.k == 0 || self.k > 10_000 {
+            return Err(Error::param(
+                "k",
+                format!("must be in 1..=10000, got {}", self.k),
+            ));
+        }
+        if let Some(r) = self.max_radius {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(Error::param(
+                    "max radius",
+                    format!("must be a positive number, got {r}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The camera this render uses for `scene`.
+    pub fn camera_for(&self, scene: &Scene) -> Camera {
+        self.camera.or(scene.camera).unwrap_or_else(Camera::cornell)
+    }
+}
+
+/// The photon maps a render reads, each a balanced kd-tree.
+pub struct RenderMaps {
+    /// Every stored photon (final gather reads it at secondary hits; the map view).
+    pub full: PhotonMap,
+    /// Photons stored at depth >= 1: indirect light at the first hit.
+    pub indirect: PhotonMap,
+    /// Photons stored at depth 0 (the primary map view, the direct-light oracle).
+    pub primary: PhotonMap,
+}
+
+impl RenderMaps {
+    /// Builds the three maps from a run's records.
+    pub fn build(records: &[PhotonRecord]) -> Self {
+        RenderMaps {
+            full: PhotonMap::build(records),
+            indirect: PhotonMap::build_filtered(records, |r| r.depth >= 1),
+            primary: PhotonMap::build_filtered(records, |r| r.depth == 0),
+        }
+    }
+}
+
+/// The default search radius of `scene`.
+pub fn default_max_radius(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.bounds();
+    let d = (hi - lo).length();
+    if d.is_finite() && d > 0.0 {
+        DEFAULT_MAX_RADIUS_FRACTION * d
+    } else {
+        1.0
+    }
+}
+
+/// Offset of secondary ray origins: a small fraction of the scene's size.
+pub(crate) fn ray_epsilon(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.bounds();
+    1e-5 * (hi - lo).length().clamp(1e-3, 1e30)
+}

@@ -1,0 +1,148 @@
+#!/usr/bin/env python3
+"""Writes assets/gallery.gltf: a scene beyond the Cornell box for the renderer
+and `bench tradeoff`. Run from the repository root: python3 tools/make_gallery.py
+
+An open-fronted room (6 x 3 x 6 m, floor at y = 0, camera outside looking +z):
+- a perfect mirror on the back wall (metallic 1, roughness 0 -> Mirror);
+- a glossy gold sphere (metallic 1, roughness 0.3 -> Cook-Torrance, m = 0.09);
+- a glossy red plastic block (metallic 0, roughness 0.25 -> Cook-Torrance with a
+  diffuse base), see brdf::from_gltf_pbr for the mapping;
+- four lights of different power, size and exponent: a large diffuse ceiling
+  panel (cosn 0), a small sharp panel (extras.cosn = 20), a KHR_lights_punctual
+  spot light and a dim point light.
+Light panels face down (their winding gives a -y normal): area lights are one-sided."""
+import base64, json, math, struct
+
+W, H, D = 3.0, 3.0, 3.0  # half-width, height, half-depth
+
+MATERIALS = [
+    {"name": "white", "pbrMetallicRoughness": {"baseColorFactor": [0.72, 0.72, 0.7, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}},
+    {"name": "blue", "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.3, 0.6, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}},
+    {"name": "sand", "pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.55, 0.3, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}},
+    {"name": "mirror", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0}},
+    {"name": "gold", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.78, 0.34, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.3}},
+    {"name": "red_plastic", "pbrMetallicRoughness": {"baseColorFactor": [0.7, 0.1, 0.08, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.25}},
+    {"name": "panel_diffuse", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0},
+     "emissiveFactor": [1.0, 0.95, 0.85], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}},
+     "extras": {"cosn": 0.0}},
+    {"name": "panel_sharp", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0},
+     "emissiveFactor": [1.0, 0.7, 0.4], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 80.0}},
+     "extras": {"cosn": 20.0}},
+]
+MAT = {m["name"]: i for i, m in enumerate(MATERIALS)}
+
+
+def quad(a, b, c, d):
+    return [a, b, c, d], [(0, 1, 2), (0, 2, 3)]
+
+
+def box(x0, x1, y0, y1, z0, z1, angle):
+    """An axis-aligned box turned by `angle` about its vertical axis; outward winding."""
+    cx, cz = (x0 + x1) / 2, (z0 + z1) / 2
+    ca, sa = math.cos(angle), math.sin(angle)
+
+    def p(x, y, z):
+        dx, dz = x - cx, z - cz
+        return (cx + ca * dx + sa * dz, y, cz - sa * dx + ca * dz)
+
+    v = [p(x, y, z) for y in (y0, y1) for z in (z0, z1) for x in (x0, x1)]
+    # v index: bit0 x, bit1 z, bit2 y
+    faces = [(4, 6, 7, 5), (0, 1, 3, 2), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    tris = [t for f in faces for t in ((f[0], f[1], f[2]), (f[0], f[2], f[3]))]
+    return v, tris
+
+
+def sphere(c, r, nu=32, nv=16):
+    v, t = [], []
+    for j in range(nv + 1):
+        th = math.pi * j / nv
+        for i in range(nu):
+            ph = 2 * math.pi * i / nu
+            v.append((c[0] + r * math.sin(th) * math.cos(ph), c[1] + r * math.cos(th), c[2] + r * math.sin(th) * math.sin(ph)))
+    for j in range(nv):
+        for i in range(nu):
+            a, b = j * nu + i, j * nu + (i + 1) % nu
+            c2, d = a + nu, b + nu
+            if j > 0:
+                t.append((a, b, c2))
+            if j < nv - 1:
+                t.append((b, d, c2))
+    return v, t
+
+
+def look_rotation(d):
+    """Quaternion (x, y, z, w) turning local -z onto the unit vector d."""
+    f = (0.0, 0.0, -1.0)
+    n = math.sqrt(sum(x * x for x in d))
+    d = tuple(x / n for x in d)
+    axis = (f[1] * d[2] - f[2] * d[1], f[2] * d[0] - f[0] * d[2], f[0] * d[1] - f[1] * d[0])
+    s = math.sqrt(sum(x * x for x in axis))
+    ang = math.atan2(s, sum(a * b for a, b in zip(f, d)))
+    axis = tuple(x / s for x in axis) if s > 1e-9 else (0.0, 1.0, 0.0)
+    h = math.sin(ang / 2)
+    return [axis[0] * h, axis[1] * h, axis[2] * h, math.cos(ang / 2)]
+
+
+def main():
+    meshes = [
+        ("floor", "white", *quad((-W, 0, -D), (-W, 0, D), (W, 0, D), (W, 0, -D))),
+        ("ceiling", "white", *quad((-W, H, -D), (W, H, -D), (W, H, D), (-W, H, D))),
+        ("back_wall", "white", *quad((-W, 0, D), (-W, H, D), (W, H, D), (W, 0, D))),
+        ("left_wall", "sand", *quad((W, 0, -D), (W, 0, D), (W, H, D), (W, H, -D))),
+        ("right_wall", "blue", *quad((-W, 0, -D), (-W, H, -D), (-W, H, D), (-W, 0, D))),
+        ("mirror", "mirror", *quad((-0.6, 0.4, D - 0.02), (-0.6, 2.3, D - 0.02), (-2.4, 2.3, D - 0.02), (-2.4, 0.4, D - 0.02))),
+        # Panels a centimetre under the ceiling, winding facing down.
+        ("panel_diffuse", "panel_diffuse", *quad((-0.6, H - 0.01, -0.6), (0.6, H - 0.01, -0.6), (0.6, H - 0.01, 0.6), (-0.6, H - 0.01, 0.6))),
+        ("panel_sharp", "panel_sharp", *quad((-1.85, H - 0.01, -1.35), (-1.55, H - 0.01, -1.35), (-1.55, H - 0.01, -1.05), (-1.85, H - 0.01, -1.05))),
+        ("gold_sphere", "gold", *sphere((1.2, 0.7, 0.9), 0.7)),
+        ("red_block", "red_plastic", *box(-1.9, -1.0, 0.0, 0.9, -0.2, 0.7, 0.4)),
+    ]
+    blob = bytearray()
+    accessors, views, gl_meshes, nodes = [], [], [], []
+    for name, mat, pos, idx in meshes:
+        off = len(blob)
+        for v in pos:
+            blob += struct.pack("<3f", *v)
+        views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(pos), "target": 34962})
+        lo = [min(v[i] for v in pos) for i in range(3)]
+        hi = [max(v[i] for v in pos) for i in range(3)]
+        accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": len(pos), "type": "VEC3", "min": lo, "max": hi})
+        off = len(blob)
+        for t in idx:
+            blob += struct.pack("<3I", *t)
+        views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(idx), "target": 34963})
+        accessors.append({"bufferView": len(views) - 1, "componentType": 5125, "count": 3 * len(idx), "type": "SCALAR"})
+        gl_meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1, "material": MAT[mat]}]})
+        nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
+    spot_pos = (2.2, 2.8, -1.8)
+    target = (1.2, 0.7, 0.9)
+    spot_dir = tuple(t - p for t, p in zip(target, spot_pos))
+    nodes.append({"name": "spot", "translation": list(spot_pos), "rotation": look_rotation(spot_dir),
+                  "extensions": {"KHR_lights_punctual": {"light": 0}}})
+    nodes.append({"name": "point", "translation": [-2.4, 1.2, 2.2], "extensions": {"KHR_lights_punctual": {"light": 1}}})
+    nodes.append({"name": "camera", "camera": 0, "translation": [0.0, 1.5, -7.2], "rotation": [0.0, 1.0, 0.0, 0.0]})
+    doc = {
+        "asset": {"version": "2.0", "generator": "adaptive-pm tools/make_gallery.py"},
+        "extensionsUsed": ["KHR_materials_emissive_strength", "KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"name": "spot", "type": "spot", "color": [0.6, 0.75, 1.0], "intensity": 12.0,
+             "spot": {"innerConeAngle": 0.25, "outerConeAngle": 0.4}},
+            {"name": "point", "type": "point", "color": [1.0, 0.9, 0.8], "intensity": 0.3},
+        ]}},
+        "scene": 0,
+        "scenes": [{"name": "gallery", "nodes": list(range(len(nodes)))}],
+        "nodes": nodes,
+        "meshes": gl_meshes,
+        "materials": MATERIALS,
+        "cameras": [{"type": "perspective", "perspective": {"yfov": math.radians(40.0), "aspectRatio": 1.0, "znear": 0.01}}],
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(blob)).decode()}],
+    }
+    with open("assets/gallery.gltf", "w") as f:
+        json.dump(doc, f, indent=1)
+        f.write("\n")
+
+
+if __name__ == "__main__":
+    main()
