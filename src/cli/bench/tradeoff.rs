@@ -440,7 +440,7 @@ fn summary(rows: &[Row], modes: &[Mode]) {
         .iter()
         .filter_map(|(_, c)| c.last().map(|p| p.0))
         .fold(f64::INFINITY, f64::min);
-    if curves.len() < 2 || !(lo < hi) {
+    if curves.len() < 2 || lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
         println!("summary: the modes' time ranges do not overlap; compare the table");
         return;
     }
