@@ -11,23 +11,11 @@ use crate::brdf::Brdf;
 use crate::embree::{CommittedScene, Ray};
 use crate::rng::Rng;
 use crate::sampling::Frame;
-use crate::scene::{Light, Scene, SpotLight, SurfacePoint};
+use crate::scene::{Light, Scene, SurfacePoint};
 use glam::Vec3;
 
 /// Shadow rays stop this fraction of their length short of either end.
 const SHADOW_EPS: f32 = 1e-4;
-
-/// The spot falloff of [`crate::scene::SpotLight`] (private there; same smoothstep).
-fn spot_falloff(s: &SpotLight, cos_theta: f32) -> f32 {
-    if cos_theta >= s.cos_inner {
-        1.0
-    } else if cos_theta <= s.cos_outer {
-        0.0
-    } else {
-        let t = (cos_theta - s.cos_outer) / (s.cos_inner - s.cos_outer).max(1e-8);
-        t * t * (3.0 - 2.0 * t)
-    }
-}
 
 /// One light sample: the point, the radiance (area) or intensity (punctual)
 /// arriving at `x` times the geometry term, before the BRDF and visibility.
@@ -60,7 +48,7 @@ fn light_sample(light: &Light, x: Vec3, rng: &mut Rng) -> Option<(Vec3, Vec3)> {
             if r2 <= 0.0 {
                 return None;
             }
-            let f = spot_falloff(s, s.direction.dot(d) / r2.sqrt());
+            let f = s.falloff(s.direction.dot(d) / r2.sqrt());
             (f > 0.0).then(|| (s.position, s.intensity * f / r2))
         }
     }

@@ -129,7 +129,9 @@ pub struct SpotLight {
 }
 
 impl SpotLight {
-    fn falloff(&self, cos_theta: f32) -> f32 {
+    /// Intensity relative to the axis at `cos_theta` from it: 1 inside the
+    /// inner cone, 0 outside the outer one, a smoothstep between.
+    pub fn falloff(&self, cos_theta: f32) -> f32 {
         if cos_theta >= self.cos_inner {
             1.0
         } else if cos_theta <= self.cos_outer {
