@@ -146,7 +146,10 @@ impl<'s> Tracer<'s> {
         let mut report = TraceReport::new(cfg.mode, n_max, &plans);
         let start = Instant::now();
         let mut queue = self.emit(cfg, &plans, epsilon);
-        let mut records: Vec<PhotonRecord> = Vec::new();
+        // Room for what a diffuse scene typically stores (about 3 hits per
+        // emitted photon), so the first waves do not copy the array as it grows.
+        let mut records: Vec<PhotonRecord> =
+            Vec::with_capacity((emitted.saturating_mul(3)).min(max_photons) as usize);
         let mut density = match cfg.mode {
             Mode::Density if emitted > 0 => {
                 let target = match cfg.density_target {
@@ -189,6 +192,7 @@ impl<'s> Tracer<'s> {
                 n_max_refl: if splitting { n_max as f64 } else { 0.0 },
                 split_cap: cfg.split_cap,
                 continue_paths: depth < cfg.max_depth,
+                keep_normals: cfg.mode == Mode::Density,
                 epsilon,
                 depth: depth as u8,
             };
@@ -216,6 +220,7 @@ impl<'s> Tracer<'s> {
             }
             let mut next: Vec<PathState> =
                 Vec::with_capacity(outs.iter().map(|o| o.children.len()).sum());
+
             let stats = report.depth_mut(depth as usize);
             for out in outs {
                 stats.hits += out.hits;

@@ -45,6 +45,8 @@ pub(super) struct ShadeContext<'a> {
     pub split_cap: u32,
     /// Whether photons at this depth may have children.
     pub continue_paths: bool,
+    /// Whether to record each stored photon's shading normal (density control).
+    pub keep_normals: bool,
     /// Offset of new ray origins from surfaces.
     pub epsilon: f32,
     pub depth: u8,
@@ -74,7 +76,11 @@ pub(super) fn shade_batch(ctx: &ShadeContext, batch: &[PathState]) -> BatchOut {
         .collect();
     let mut hits: Vec<Option<Hit>> = vec![None; rays.len()];
     ctx.rt.intersect_batch(&rays, &mut hits);
-    let mut out = BatchOut::default();
+    let mut out = BatchOut {
+        stored: Vec::with_capacity(batch.len()),
+        children: Vec::with_capacity(batch.len()),
+        ..BatchOut::default()
+    };
     for (p, hit) in batch.iter().zip(&hits) {
         match hit {
             None => out.escaped += 1,
@@ -102,7 +108,9 @@ fn shade_hit(ctx: &ShadeContext, p: &PathState, h: &Hit, out: &mut BatchOut) {
             direction: p.direction,
             depth: ctx.depth,
         });
-        out.normals.push(n);
+        if ctx.keep_normals {
+            out.normals.push(n);
+        }
     }
     if !ctx.continue_paths {
         return;
