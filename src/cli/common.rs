@@ -19,7 +19,7 @@ pub struct BudgetArgs {
     #[arg(long, short = 'n')]
     pub n_max: Option<u64>,
     /// Override every area light's cos^n exponent.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub cosn: Option<f32>,
     /// Seed of every random number.
     #[arg(long, default_value_t = 1)]

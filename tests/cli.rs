@@ -1,0 +1,129 @@
+//! The command line as a user meets it: `--json` prints one object with the
+//! documented keys, bad input exits non-zero with a message naming the
+//! problem, and nothing panics.
+
+use serde_json::Value;
+use std::process::Command;
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_adaptive-pm"))
+        .args(args)
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).to_string(),
+        stderr,
+    )
+}
+
+fn json(args: &[&str]) -> Value {
+    let (code, out, err) = run(args);
+    assert_eq!(code, 0, "{args:?}: {err}");
+    // exactly one JSON object on stdout
+    serde_json::from_str(out.trim()).unwrap_or_else(|e| panic!("{args:?}: {e}: {out}"))
+}
+
+#[test]
+fn scene_json_lists_triangles_and_lights() {
+    let v = json(&["scene", "cornell", "--json"]);
+    assert_eq!(v["triangles"], 32);
+    let l = &v["lights"][0];
+    assert!((l["area"].as_f64().unwrap() - 13650.0).abs() < 0.1);
+    assert_eq!(l["power"].as_array().unwrap().len(), 3);
+}
+
+#[test]
+fn trace_json_has_every_documented_key() {
+    let v = json(&[
+        "trace", "cornell", "--mode", "adaptive", "--n-max", "3000", "--cosn", "20", "--json",
+    ]);
+    for key in [
+        "emitted",
+        "emitted_per_light",
+        "stored",
+        "stored_primary",
+        "reemitted_first_hit",
+        "split_rate_by_depth",
+        "max_density",
+        "mean_density",
+        "sigma_density",
+        "max_density_primary",
+        "mean_density_primary",
+        "sigma_density_primary",
+        "trace_s",
+        "build_s",
+        "bytes_per_photon",
+        "budget_bound",
+        "stored_power",
+        "checksum",
+    ] {
+        assert!(!v[key].is_null(), "missing {key}");
+    }
+    assert!(
+        v["emitted"].as_u64().unwrap() < 3000,
+        "a cos^20 light emits fewer photons"
+    );
+    let again = json(&[
+        "trace",
+        "cornell",
+        "--mode",
+        "adaptive",
+        "--n-max",
+        "3000",
+        "--cosn",
+        "20",
+        "--json",
+        "--threads",
+        "1",
+    ]);
+    assert_eq!(
+        v["checksum"], again["checksum"],
+        "1 and 2 threads give the same map"
+    );
+}
+
+#[test]
+fn bench_rays_json() {
+    let v = json(&["bench", "rays", "cornell", "--rays", "20000", "--json"]);
+    for key in [
+        "raw_mrays_per_s",
+        "single_mrays_per_s",
+        "batch_mrays_per_s",
+        "threads",
+    ] {
+        assert!(v[key].as_f64().unwrap() > 0.0, "{key}");
+    }
+}
+
+#[test]
+fn analyze_scene_json() {
+    let v = json(&["analyze", "cornell", "--json"]);
+    let f = v["functions"].as_array().unwrap();
+    assert!(f.iter().any(|x| x["kind"] == "cosn" && x["alpha_d"] == 1.0));
+    assert!(f
+        .iter()
+        .any(|x| x["kind"] == "lambert" && x["alpha_d_by_theta_in"].is_array()));
+}
+
+#[test]
+fn quality_zero_is_an_empty_run_and_bad_input_is_a_clear_error() {
+    let v = json(&["trace", "cornell", "--quality", "0", "--json"]);
+    assert_eq!(v["emitted"], 0);
+    assert_eq!(v["stored"], 0);
+    for (args, needle) in [
+        (vec!["trace", "cornell", "--quality", "1"], "budget"),
+        (vec!["trace", "cornell", "--quality", "1.5"], "quality"),
+        (vec!["trace", "cornell", "--cosn", "-1"], "cosn"),
+        (vec!["trace", "cornell", "--cosn", "NaN"], "cosn"),
+        (vec!["scene", "/no/such/scene.gltf"], "/no/such/scene.gltf"),
+        (vec!["trace", "/no/such/scene.glb"], "/no/such/scene.glb"),
+        (vec!["bench", "cornell", "--n-sweep", "1..x"], "A..B"),
+    ] {
+        let (code, _, err) = run(&args);
+        assert_ne!(code, 0, "{args:?}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+}
