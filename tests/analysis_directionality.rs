@@ -7,7 +7,7 @@ use adaptive_pm::analysis::{
 use adaptive_pm::brdf::{Brdf, CookTorrance, Lambert, Mirror, Phong};
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::rng::Rng;
-use adaptive_pm::sampling::{cos_power_hemisphere, Frame};
+use adaptive_pm::sampling::{spherical_direction, Frame};
 use glam::Vec3;
 
 const BOTH: [Estimator; 2] = [Estimator::Paper, Estimator::PeakDensity];
@@ -122,50 +122,82 @@ fn phong_alpha_falls_with_the_exponent_and_mirror_is_the_floor() {
     }
 }
 
-/// `count` directions from a cos^e lobe around `axis`, valued by a unit
-/// lobe `peak * cos^e`.
-fn lobe(axis: Vec3, e: f32, peak: f32, count: usize, r: &mut Rng) -> (Vec<Vec3>, Vec<f32>) {
+/// `count` importance samples of a flat-topped lobe around `axis`: value 30
+/// within `t1` radians of the axis, falling linearly to 0 at `t2` (sampled
+/// by rejection from the cap of half-angle `t2`, so directions follow the
+/// function).
+fn plateau(axis: Vec3, t1: f32, t2: f32, count: usize, r: &mut Rng) -> (Vec<Vec3>, Vec<f32>) {
     let f = Frame::from_normal(axis.normalize());
-    (0..count)
-        .map(|_| {
-            let l = cos_power_hemisphere(e, r.next_2d());
-            (f.world_from_local(l), peak * l.z.powf(e))
-        })
-        .filter(|(w, _)| w.z > 0.0)
-        .unzip()
+    let (mut d, mut v) = (Vec::new(), Vec::new());
+    while d.len() < count {
+        let [a, b] = r.next_2d();
+        let c = 1.0 - a * (1.0 - t2.cos());
+        let th = c.clamp(-1.0, 1.0).acos();
+        let val = if th < t1 {
+            30.0
+        } else {
+            30.0 * (t2 - th) / (t2 - t1)
+        };
+        if r.next_f32() * 30.0 < val {
+            let w = f.world_from_local(spherical_direction(c, std::f32::consts::TAU * b));
+            if w.z > 0.0 {
+                d.push(w);
+                v.push(val);
+            }
+        }
+    }
+    (d, v)
 }
 
+fn has_peak_around(peaks: &[adaptive_pm::analysis::Peak], axis: Vec3) -> bool {
+    let axis = axis.normalize();
+    peaks.iter().any(|pk| pk.direction.dot(axis) > 0.2f32.cos())
+}
+
+/// The paper's clustering is a property of the sample set, so it is tested
+/// over 50 independent sample sets, as rates.
+///
+/// - Two flat-topped lobes, 90° apart, 300 samples each: a peak around each
+///   in 48 of 50 sets as measured; we require 45 (90 %).
+/// - A third lobe of 5 % of the samples (< 10 %) is never a peak: required in
+///   all 50.
+///
+/// What this does *not* claim: for two sharply peaked `cos^200` lobes the
+/// method finds both in only ~22 of 50 sets (the core of a lobe holds ~13 % of
+/// all samples, so the 10 % rule often drops one of them), a limitation of the
+/// paper's constants that the README reports.
 #[test]
 fn two_separated_lobes_give_two_peaks_and_a_small_one_is_dropped() {
     let p = AnalysisParams::default();
-    let mut r = Rng::new(5);
-    let (mut d, mut v) = lobe(Vec3::new(0.7, 0.0, 0.7), 200.0, 30.0, 300, &mut r);
-    let (d2, v2) = lobe(Vec3::new(-0.7, 0.0, 0.7), 200.0, 30.0, 300, &mut r);
-    d.extend(d2);
-    v.extend(v2);
-    let peaks = find_peaks(&d, &v, d.len(), &p);
-    // One peak around each axis. (The method's stopping rule is a variance
-    // bound, not a distance: once both cores are set aside, the low-valued
-    // tails of both lobes, whose values vary little, may form one more wide
-    // peak; that is the paper's algorithm, reported, not hidden.)
-    for axis in [Vec3::new(0.7, 0.0, 0.7), Vec3::new(-0.7, 0.0, 0.7)] {
-        let axis = axis.normalize();
-        assert!(
-            peaks.iter().any(|pk| pk.direction.dot(axis) > 0.2f32.cos()),
-            "no peak around {axis}: {peaks:?}"
-        );
+    let (x, y) = (Vec3::new(0.7, 0.0, 0.7), Vec3::new(-0.7, 0.0, 0.7));
+    let (mut both, mut small_dropped) = (0, 0);
+    for seed in 0..50u64 {
+        let mut r = Rng::new(seed);
+        let (mut d, mut v) = plateau(x, 0.1, 0.2, 300, &mut r);
+        let (d2, v2) = plateau(y, 0.1, 0.2, 300, &mut r);
+        d.extend(d2);
+        v.extend(v2);
+        let peaks = find_peaks(&d, &v, d.len(), &p);
+        both += u32::from(has_peak_around(&peaks, x) && has_peak_around(&peaks, y));
+
+        let (mut d, mut v) = plateau(x, 0.1, 0.2, 570, &mut r);
+        let (d3, v3) = plateau(Vec3::new(0.0, 0.7, 0.7), 0.1, 0.2, 30, &mut r);
+        d.extend(d3);
+        v.extend(v3);
+        let peaks = find_peaks(&d, &v, d.len(), &p);
+        let ok = !peaks.is_empty()
+            && peaks
+                .iter()
+                .all(|pk| pk.direction.y.abs() < 0.3 && pk.samples as f32 >= 0.1 * d.len() as f32);
+        small_dropped += u32::from(ok);
     }
-    // A third lobe of 5 % of the samples (< 10 %) is not a peak.
-    let (d3, v3) = lobe(Vec3::new(0.0, 0.7, 0.7), 200.0, 30.0, 30, &mut r);
-    let (mut d, mut v) = lobe(Vec3::new(0.7, 0.0, 0.7), 200.0, 30.0, 570, &mut r);
-    d.extend(d3);
-    v.extend(v3);
-    let peaks = find_peaks(&d, &v, d.len(), &p);
-    assert!(!peaks.is_empty());
-    for pk in &peaks {
-        assert!(pk.direction.y.abs() < 0.3, "small lobe kept: {pk:?}");
-        assert!(pk.samples as f32 >= 0.1 * d.len() as f32);
-    }
+    assert!(both >= 45, "two lobes found in {both}/50 sample sets");
+    assert_eq!(
+        small_dropped,
+        50,
+        "small lobe kept in {} sets",
+        50 - small_dropped
+    );
 }
 
 #[test]
