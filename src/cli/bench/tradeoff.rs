@@ -93,6 +93,9 @@ pub struct TradeoffArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub threads: ThreadArgs,
+    /// Print one JSON object on stdout (the table and summary go to stderr).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// k of the estimates for a budget (see the module docs).
@@ -234,6 +237,14 @@ fn reference(
     })
 }
 
+/// `println!`, or `eprintln!` when stdout is reserved for `--json`.
+macro_rules! say {
+    ($json:expr, $($t:tt)*) => {
+        if $json { eprintln!($($t)*) } else { println!($($t)*) }
+    };
+}
+
+#[derive(serde::Serialize)]
 struct Row {
     mode: Mode,
     n_max: u64,
@@ -280,7 +291,8 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
     pool.install(|| -> anyhow::Result<()> {
         let reference = reference(&args, &scene, &rt, &pts)?;
         let ref_mean = reference.image.mean().as_dvec3().element_sum() / 3.0;
-        println!(
+        say!(
+            args.json,
             "reference noise: RMSE {:.3e} ({:.2} % of the mean radiance {:.4})",
             reference.noise_rmse,
             100.0 * reference.noise_rmse / ref_mean,
@@ -300,9 +312,18 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
         }
         std::fs::write(args.out.join("floor.csv"), floor_csv)?;
         let mut rows = Vec::new();
-        println!(
+        say!(
+            args.json,
             "{:>9} {:>9} {:>5} {:>9} {:>8} {:>9} {:>9} {:>9} {:>9}",
-            "mode", "N_MAX", "k", "photons", "time s", "rel RMSE", "map rel", "floor", "floor dir"
+            "mode",
+            "N_MAX",
+            "k",
+            "photons",
+            "time s",
+            "rel RMSE",
+            "map rel",
+            "floor",
+            "floor dir"
         );
         for &mode in &args.modes {
             for &n_max in &budgets {
@@ -347,7 +368,8 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
                         &direct,
                     ),
                 };
-                println!(
+                say!(
+                    args.json,
                     "{:>9} {:>9} {:>5} {:>9} {:>8.3} {:>9.4} {:>9.4} {:>9.4} {:>9.4}",
                     mode.name(),
                     n_max,
@@ -369,11 +391,32 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
             &rows,
             reference.noise_rmse / ref_mean,
         )?;
-        summary(&rows, &args.modes);
-        println!(
+        let lines = summary(&rows, &args.modes, args.json);
+        say!(
+            args.json,
             "wrote {}/{{tradeoff.csv,floor.csv,tradeoff.png,reference.exr,reference.json}}",
             args.out.display()
         );
+        if args.json {
+            let rows: Vec<serde_json::Value> = rows
+                .iter()
+                .map(|r| {
+                    let mut v = serde_json::to_value(r).unwrap_or_default();
+                    v["total_s"] = json!(r.total_s());
+                    v
+                })
+                .collect();
+            println!(
+                "{}",
+                json!({
+                    "scene": args.scene,
+                    "reference_noise_rel": reference.noise_rmse / ref_mean,
+                    "rows": rows,
+                    "equal_time": lines,
+                    "out_dir": args.out,
+                })
+            );
+        }
         Ok(())
     })
 }
@@ -430,7 +473,9 @@ fn at_time(c: &[(f64, f64)], t: f64) -> Option<f64> {
     })
 }
 
-fn summary(rows: &[Row], modes: &[Mode]) {
+/// Prints, and returns, the equal-time comparison.
+fn summary(rows: &[Row], modes: &[Mode], json: bool) -> Vec<String> {
+    let mut lines = Vec::new();
     let curves: Vec<(Mode, Vec<(f64, f64)>)> = modes.iter().map(|&m| (m, curve(rows, m))).collect();
     let lo = curves
         .iter()
@@ -441,10 +486,16 @@ fn summary(rows: &[Row], modes: &[Mode]) {
         .filter_map(|(_, c)| c.last().map(|p| p.0))
         .fold(f64::INFINITY, f64::min);
     if curves.len() < 2 || lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
-        println!("summary: the modes' time ranges do not overlap; compare the table");
-        return;
+        say!(
+            json,
+            "summary: the modes' time ranges do not overlap; compare the table"
+        );
+        return lines;
     }
-    println!("at equal time (log-log interpolation of relative RMSE):");
+    say!(
+        json,
+        "at equal time (log-log interpolation of relative RMSE):"
+    );
     for f in [0.1, 0.5, 0.9] {
         let t = (lo.ln() + f * (hi.ln() - lo.ln())).exp();
         let mut errs: Vec<(Mode, f64)> = curves
@@ -459,13 +510,16 @@ fn summary(rows: &[Row], modes: &[Mode]) {
             .iter()
             .map(|(m, x)| format!("{} {:.4} (x{:.2})", m.name(), x, x / e))
             .collect();
-        println!(
-            "  t = {t:.2} s: {} lowest, {:.4}; {}",
+        let line = format!(
+            "t = {t:.2} s: {} lowest, {:.4}; {}",
             best.name(),
             e,
             others.join(", ")
         );
+        say!(json, "  {line}");
+        lines.push(line);
     }
+    lines
 }
 
 fn plot(path: &Path, scene: &str, rows: &[Row], reference_noise: f64) -> anyhow::Result<()> {
