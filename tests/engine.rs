@@ -321,3 +321,40 @@ fn albedo_zero_and_one_and_extreme_exponents_terminate() {
         }
     }
 }
+
+#[test]
+fn the_memory_budget_bounds_a_wave_of_splitting() {
+    // A cos^200 light at N_MAX = 1e6 emits ~17 000 photons that would each
+    // split ~60-fold at the first hit: 1e6 children. With room for 200 000
+    // photons, the wave's splitting is scaled down to fit, and says so.
+    let mut scene = Scene::cornell().unwrap();
+    scene.set_cosn(CosN::new(200.0).unwrap());
+    let max_photons = 200_000u64;
+    let mut c = cfg(Mode::Adaptive, 1_000_000, 4);
+    c.memory_budget = Some(max_photons * adaptive_pm::engine::tracer::BYTES_PER_PHOTON_IN_FLIGHT);
+    let (out, _) = run(&scene, &c, 2);
+    let r = &out.report;
+    assert!(r.budget_bound);
+    assert!(r.stored <= max_photons, "{} stored", r.stored);
+    // the children of the first wave fit in half the budget, less what it held
+    assert!(
+        r.reemitted_first_hit <= max_photons / 2,
+        "{}",
+        r.reemitted_first_hit
+    );
+    // splitting still happened, scaled, not switched off
+    assert!(
+        r.split_rate_by_depth[0] > 1.5,
+        "{:?}",
+        r.split_rate_by_depth
+    );
+    // and the power is still right: the same first-bounce power as an unbounded run
+    let mut free = c.clone();
+    free.memory_budget = None;
+    let (f, _) = run(&scene, &free, 2);
+    let (a, b) = (
+        r.depths[1].stored_power_luminance,
+        f.report.depths[1].stored_power_luminance,
+    );
+    assert!((a - b).abs() < 0.05 * b, "depth-1 power {a} vs {b}");
+}

@@ -18,6 +18,27 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
+/// An upper bound of the children a wave can make: the sum over its photons of
+/// `min(cap, max(alpha_E N_MAX, 1)) + 1` (`alpha_D <= 1`, Russian roulette
+/// makes at most one child, and rounding up adds at most one). Summed in
+/// fixed chunks, in order, so it does not depend on the thread count or the
+/// batch size.
+fn split_bound(queue: &[PathState], max_light_luminance: f32, n_max: u64, cap: u32) -> f64 {
+    const CHUNK: usize = 4096;
+    let per_chunk: Vec<f64> = queue
+        .par_chunks(CHUNK)
+        .map(|c| {
+            c.iter()
+                .map(|p| {
+                    let s = luminance(p.power) as f64 / max_light_luminance as f64 * n_max as f64;
+                    s.max(1.0).min(cap as f64) + 1.0
+                })
+                .sum::<f64>()
+        })
+        .collect();
+    per_chunk.iter().sum()
+}
+
 /// alpha_D tables for the materials the scene's meshes use (adaptive mode
 /// only): only what the scene needs is analysed.
 fn material_tables(
@@ -183,13 +204,33 @@ impl<'s> Tracer<'s> {
                 splitting = false;
                 report.budget_bound = true;
             }
+            // The children of this wave must fit in what is left of that half
+            // too, or one wave of splitting alone could exhaust memory (a
+            // sharp light at a high Q: few photons, each split many times).
+            // `s <= alpha_E(photon) N_MAX` (alpha_D <= 1), so the sum of that
+            // bound over the queue caps the children; when it exceeds the
+            // room left, every `s` of this wave is scaled down to fit.
+            let mut split_scale = 1.0;
+            if splitting {
+                let room =
+                    (max_photons / 2).saturating_sub((records.len() + queue.len()) as u64) as f64;
+                let bound = split_bound(&queue, max_light_luminance, n_max, cfg.split_cap);
+                if bound > room {
+                    split_scale = room / bound;
+                    report.budget_bound = true;
+                }
+            }
             let ctx = ShadeContext {
                 scene: self.scene,
                 rt: self.rt,
                 tables: &tables,
                 alpha_min: cfg.analysis.alpha_min,
                 max_light_luminance,
-                n_max_refl: if splitting { n_max as f64 } else { 0.0 },
+                n_max_refl: if splitting {
+                    n_max as f64 * split_scale
+                } else {
+                    0.0
+                },
                 split_cap: cfg.split_cap,
                 continue_paths: depth < cfg.max_depth,
                 keep_normals: cfg.mode == Mode::Density,
