@@ -36,6 +36,22 @@ pub struct BrdfSample {
     pub specular: bool,
 }
 
+/// The common end of a non-delta sampler: the sample of direction `wo` with
+/// solid-angle pdf `pdf` and BRDF value `f`, or `None` when the pdf is not a
+/// positive number or the weight `f cos / pdf` is not finite.
+pub(crate) fn weighted_sample(wo: Vec3, pdf: f32, f: Vec3) -> Option<BrdfSample> {
+    if pdf.is_nan() || pdf <= 0.0 {
+        return None;
+    }
+    let weight = f * wo.z / pdf;
+    weight.is_finite().then_some(BrdfSample {
+        wo,
+        weight,
+        pdf,
+        specular: false,
+    })
+}
+
 /// The reflection models a scene may use.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Brdf {

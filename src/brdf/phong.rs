@@ -129,17 +129,7 @@ impl Phong {
         if wo.z <= 0.0 {
             return None;
         }
-        let pdf = self.pdf(wi, wo);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        let weight = self.eval(wi, wo) * wo.z / pdf;
-        weight.is_finite().then_some(BrdfSample {
-            wo,
-            weight,
-            pdf,
-            specular: false,
-        })
+        super::weighted_sample(wo, self.pdf(wi, wo), self.eval(wi, wo))
     }
 
     /// Solid-angle pdf of [`Phong::sample`].
