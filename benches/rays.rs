@@ -162,7 +162,8 @@ fn raw(scene: &CommittedScene, rays: &[Ray]) -> usize {
     hits
 }
 
-fn cornell_rays(scene: &Scene) -> Vec<Ray> {
+/// `bench rays`' incoherent rays on any scene's surfaces.
+fn surface_rays(scene: &Scene) -> Vec<Ray> {
     let (lo, hi) = scene.bounds();
     scene
         .surface_sampler()
@@ -180,7 +181,7 @@ fn bench_rays(c: &mut Criterion) {
     let mut cases = vec![(
         "cornell",
         cornell.commit(&device).unwrap(),
-        vec![("incoherent", cornell_rays(&cornell))],
+        vec![("incoherent", surface_rays(&cornell))],
     )];
     for (scene_name, n) in [("box12", 1), ("box49k", 64)] {
         cases.push((
@@ -230,31 +231,39 @@ fn bench_rays(c: &mut Criterion) {
 /// The tracer's rays per second against raw Embree on the same scene and thread.
 fn bench_tracer(c: &mut Criterion) {
     let device = Device::new().unwrap();
-    let scene = Scene::cornell().unwrap();
-    let rt = scene.commit(&device).unwrap();
     let pool = thread_pool(1).unwrap();
     let cfg = TraceConfig::new(Mode::Classic, Budget::NMax(100_000));
-    let mut tracer = Tracer::new(&scene, &rt);
-    // The ray count of a run is fixed by its seed.
-    let rays_per_trace = pool.install(|| tracer.trace(&cfg).unwrap().report.rays);
-    let rays = cornell_rays(&scene);
+    let gallery = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/gallery.gltf");
     let mut group = c.benchmark_group("tracer");
     group.sample_size(10);
     group.measurement_time(Duration::from_secs(5));
-    group.throughput(Throughput::Elements(rays.len() as u64));
-    group.bench_function("raw_cornell_incoherent", |b| {
-        b.iter_custom(|iters| pool.install(|| timed(iters, || raw(&rt, black_box(&rays)))))
-    });
-    group.throughput(Throughput::Elements(rays_per_trace));
-    group.bench_function("classic_trace_cornell", |b| {
-        b.iter_custom(|iters| {
-            pool.install(|| {
-                timed(iters, || {
-                    tracer.trace(black_box(&cfg)).unwrap().records.len()
+    // The Cornell box (32 triangles) and the gallery (988 triangles, glossy
+    // surfaces, four lights): the tracer's share of raw Embree grows with the
+    // cost of a ray.
+    for (name, scene) in [
+        ("cornell", Scene::cornell().unwrap()),
+        ("gallery", Scene::load(gallery).unwrap()),
+    ] {
+        let rt = scene.commit(&device).unwrap();
+        let mut tracer = Tracer::new(&scene, &rt);
+        // The ray count of a run is fixed by its seed.
+        let rays_per_trace = pool.install(|| tracer.trace(&cfg).unwrap().report.rays);
+        let rays = surface_rays(&scene);
+        group.throughput(Throughput::Elements(rays.len() as u64));
+        group.bench_function(format!("raw_{name}_incoherent"), |b| {
+            b.iter_custom(|iters| pool.install(|| timed(iters, || raw(&rt, black_box(&rays)))))
+        });
+        group.throughput(Throughput::Elements(rays_per_trace));
+        group.bench_function(format!("classic_trace_{name}"), |b| {
+            b.iter_custom(|iters| {
+                pool.install(|| {
+                    timed(iters, || {
+                        tracer.trace(black_box(&cfg)).unwrap().records.len()
+                    })
                 })
             })
-        })
-    });
+        });
+    }
     group.finish();
 }
 

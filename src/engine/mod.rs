@@ -14,6 +14,7 @@
 //! # Ok::<(), adaptive_pm::Error>(())
 //! ```
 
+pub mod albedo;
 pub mod config;
 pub mod counts;
 mod density_control;

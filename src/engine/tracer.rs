@@ -1,6 +1,7 @@
 //! The wave loop: emission (wave 0), then one wave per bounce depth, until the
 //! queue is empty or the depth limit is reached.
 
+use super::albedo::AlbedoTable;
 use super::config::{available_memory, DensityTarget, Mode, TraceConfig, DENSITY_CONTROL_K};
 use super::counts::{photon_power, plan_emission, LightPlan};
 use super::density_control::DensityControl;
@@ -155,6 +156,12 @@ impl<'s> Tracer<'s> {
             });
         }
         let tables = material_tables(self.scene, cache, cfg.mode)?;
+        let albedo: Vec<AlbedoTable> = self
+            .scene
+            .materials
+            .iter()
+            .map(|m| AlbedoTable::new(&m.brdf))
+            .collect();
         let (lo, hi) = self.scene.bounds();
         let epsilon = 1e-5 * (hi - lo).length().max(1e-3);
         let max_light_luminance = self
@@ -224,6 +231,7 @@ impl<'s> Tracer<'s> {
                 scene: self.scene,
                 rt: self.rt,
                 tables: &tables,
+                albedo: &albedo,
                 alpha_min: cfg.analysis.alpha_min,
                 max_light_luminance,
                 n_max_refl: if splitting {

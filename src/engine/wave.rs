@@ -5,6 +5,7 @@
 //! a photon's random numbers come from its key, so a wave's result does not
 //! depend on the thread count or the batch size.
 
+use super::albedo::AlbedoTable;
 use super::counts::{expected_children, round_stochastic};
 use crate::analysis::DirectionalityTable;
 use crate::brdf::Brdf;
@@ -35,6 +36,8 @@ pub(super) struct ShadeContext<'a> {
     pub rt: &'a CommittedScene,
     /// alpha_D tables by material (adaptive mode); `None` for delta BRDFs.
     pub tables: &'a [Option<Arc<DirectionalityTable>>],
+    /// Albedo tables by material (the survival probability).
+    pub albedo: &'a [AlbedoTable],
     /// Floor of alpha_D (delta BRDFs).
     pub alpha_min: f32,
     /// Luminance of the most powerful light: the photon's alpha_E is its power over it.
@@ -118,7 +121,7 @@ fn shade_hit(ctx: &ShadeContext, p: &PathState, h: &Hit, out: &mut BatchOut) {
     let frame = Frame::from_normal(n);
     let wi = frame.local_from_world(-p.direction);
     // The classic survival probability: the largest channel of the albedo.
-    let r = brdf.albedo(wi).max_element().min(1.0) as f64;
+    let r = ctx.albedo[material].at(wi.z).max_element().min(1.0) as f64;
     if r <= 0.0 {
         return;
     }
