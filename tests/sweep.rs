@@ -51,3 +51,23 @@ fn malformed_sweeps_are_rejected_with_the_syntax() {
     assert!(parse_sweep(&big).is_err(), "one more than the cap");
     assert!(parse_sweep(&format!("1..{}", MAX_SWEEP_POINTS)).is_ok());
 }
+
+#[test]
+fn density_targets_parse() {
+    use adaptive_pm::experiments::cornell::SweepDensityTarget;
+    assert_eq!(
+        "mean".parse::<SweepDensityTarget>().unwrap(),
+        SweepDensityTarget::ReferenceMean
+    );
+    assert_eq!(
+        "max".parse::<SweepDensityTarget>().unwrap(),
+        SweepDensityTarget::ReferenceMax
+    );
+    assert_eq!(
+        "0.25".parse::<SweepDensityTarget>().unwrap(),
+        SweepDensityTarget::PerArea(0.25)
+    );
+    for bad in ["", "0", "-1", "NaN", "inf", "maximum"] {
+        assert!(bad.parse::<SweepDensityTarget>().is_err(), "{bad}");
+    }
+}

@@ -51,6 +51,39 @@ pub struct CornellConfig {
     pub estimator: Estimator,
     /// Bounce limit of every run.
     pub max_depth: u32,
+    /// Density control's target in the density-mode runs.
+    pub density_target: SweepDensityTarget,
+}
+
+/// Where the density-mode runs of a sweep put their target density.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SweepDensityTarget {
+    /// The reference's full-map *mean* density (the default: the experiments'
+    /// setting): density control then caps every map near the mean.
+    ReferenceMean,
+    /// The reference's primary-map *max* density (Fig. 7a's reference line).
+    ReferenceMax,
+    /// A given density, photons per unit area (> 0).
+    PerArea(f64),
+}
+
+impl std::str::FromStr for SweepDensityTarget {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "mean" => Ok(SweepDensityTarget::ReferenceMean),
+            "max" => Ok(SweepDensityTarget::ReferenceMax),
+            _ => match s.parse::<f64>() {
+                Ok(d) if d.is_finite() && d > 0.0 => Ok(SweepDensityTarget::PerArea(d)),
+                _ => Err(Error::param(
+                    "density target",
+                    format!(
+                        "`{s}` is not `mean`, `max` or a positive number of photons per unit area"
+                    ),
+                )),
+            },
+        }
+    }
 }
 
 impl CornellConfig {
@@ -64,6 +97,7 @@ impl CornellConfig {
             seed: 1,
             estimator: Estimator::Paper,
             max_depth: crate::engine::config::DEFAULT_MAX_DEPTH,
+            density_target: SweepDensityTarget::ReferenceMean,
         }
     }
 
@@ -418,10 +452,15 @@ pub fn run_cornell(
     account(&mut timing, &reference);
     let done = AtomicUsize::new(1);
     let mut density_cfg = cfg.trace_config(Mode::Density);
+    let target = match cfg.density_target {
+        SweepDensityTarget::ReferenceMean => reference.mean_density,
+        SweepDensityTarget::ReferenceMax => reference.max_density_primary,
+        SweepDensityTarget::PerArea(d) => d,
+    };
     // A diffuse classic run that stored nothing (N_MAX = 0) leaves no target:
     // density control then falls back to its automatic one.
-    if reference.mean_density > 0.0 && reference.mean_density.is_finite() {
-        density_cfg.density_target = DensityTarget::PerArea(reference.mean_density);
+    if target > 0.0 && target.is_finite() {
+        density_cfg.density_target = DensityTarget::PerArea(target);
     }
 
     // Every run at one n, in mode order, on the calling thread's pool.

@@ -7,7 +7,7 @@ use adaptive_pm::analysis::Estimator;
 use adaptive_pm::engine::config::DEFAULT_MAX_DEPTH;
 use adaptive_pm::engine::Mode;
 use adaptive_pm::experiments::claims::check_claims;
-use adaptive_pm::experiments::cornell::{run_cornell, CornellConfig};
+use adaptive_pm::experiments::cornell::{run_cornell, CornellConfig, SweepDensityTarget};
 use adaptive_pm::experiments::output::{claims_table, write_outputs};
 use adaptive_pm::experiments::sweep::parse_sweep;
 use anyhow::Context;
@@ -47,6 +47,10 @@ pub struct CornellArgs {
     /// Bounces after the first hit.
     #[arg(long, default_value_t = DEFAULT_MAX_DEPTH)]
     pub max_depth: u32,
+    /// Density control's target: `mean` (the reference's full-map mean
+    /// density), `max` (its primary-map max density) or photons per unit area.
+    #[arg(long, default_value = "mean")]
+    pub density_target: SweepDensityTarget,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -76,6 +80,7 @@ pub fn run(args: CornellArgs) -> anyhow::Result<()> {
         seed: args.seed,
         estimator: args.directionality,
         max_depth: args.max_depth,
+        density_target: args.density_target,
     };
     cfg.validate()?;
     let out_dir = args.out.clone().unwrap_or_else(|| {
