@@ -66,6 +66,20 @@ fn checked(name: &str, v: &[f32]) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn emitter_row(e: &CosN, est: Estimator, p: &AnalysisParams) -> anyhow::Result<Row> {
+    let d = analyze_emitter(e, est, p)?;
+    Ok(Row {
+        kind: "cosn",
+        name: None,
+        param: Some(e.exponent()),
+        alpha_d: d.alpha_d,
+        alpha_d_by_theta_in: None,
+        peaks: d.peaks.len(),
+        sample_ms: d.sample_time.as_secs_f64() * 1e3,
+        cluster_ms: d.cluster_time.as_secs_f64() * 1e3,
+    })
+}
+
 fn brdf_row(
     kind: &'static str,
     param: Option<f32>,
@@ -101,17 +115,9 @@ fn scene_rows(
         if let Light::Area(a) = l {
             let n = a.emission.profile.exponent();
             if seen.insert(("cosn", n.to_bits() as u64)) {
-                let d = analyze_emitter(&a.emission.profile, est, p)?;
-                rows.push(Row {
-                    kind: "cosn",
-                    name: Some(scene.meshes[a.mesh].name.clone()),
-                    param: Some(n),
-                    alpha_d: d.alpha_d,
-                    alpha_d_by_theta_in: None,
-                    peaks: d.peaks.len(),
-                    sample_ms: d.sample_time.as_secs_f64() * 1e3,
-                    cluster_ms: d.cluster_time.as_secs_f64() * 1e3,
-                });
+                let mut row = emitter_row(&a.emission.profile, est, p)?;
+                row.name = Some(scene.meshes[a.mesh].name.clone());
+                rows.push(row);
             }
         }
     }
@@ -138,17 +144,7 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
         scene_rows(name, est, &p, &mut rows)?;
     }
     for &n in &args.cosn {
-        let d = analyze_emitter(&CosN::new(n)?, est, &p)?;
-        rows.push(Row {
-            kind: "cosn",
-            name: None,
-            param: Some(n),
-            alpha_d: d.alpha_d,
-            alpha_d_by_theta_in: None,
-            peaks: d.peaks.len(),
-            sample_ms: d.sample_time.as_secs_f64() * 1e3,
-            cluster_ms: d.cluster_time.as_secs_f64() * 1e3,
-        });
+        rows.push(emitter_row(&CosN::new(n)?, est, &p)?);
     }
     for &e in &args.phong {
         let b = Phong::new(Vec3::ZERO, Vec3::splat(0.9), e).context("--phong")?;

@@ -48,7 +48,12 @@ pub struct Plot {
     pub lines: Vec<RefLine>,
 }
 
-fn font() -> Result<()> {
+/// Registers the bundled DejaVu Sans as "sans-serif" (once): plotters'
+/// `ab_glyph` backend sees no system fonts.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] if the bundled font does not parse.
+pub fn register_font() -> Result<()> {
     static DONE: OnceLock<bool> = OnceLock::new();
     let ok = *DONE.get_or_init(|| {
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).is_ok()
@@ -201,7 +206,7 @@ fn draw<DB: DrawingBackend>(
 /// # Errors
 /// [`Error::Io`] when a file cannot be written.
 pub fn write_plot(stem: &Path, plot: &Plot) -> Result<()> {
-    font()?;
+    register_font()?;
     let svg = stem.with_extension("svg");
     draw(SVGBackend::new(&svg, PLOT_SIZE).into_drawing_area(), plot).map_err(|e| io(&svg, e))?;
     let png = stem.with_extension("png");

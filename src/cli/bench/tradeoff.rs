@@ -39,8 +39,6 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
-
 /// Bumped when the reference's computation changes, so old caches are redone.
 const REFERENCE_VERSION: u32 = 2;
 
@@ -523,8 +521,7 @@ fn summary(rows: &[Row], modes: &[Mode], json: bool) -> Vec<String> {
 }
 
 fn plot(path: &Path, scene: &str, rows: &[Row], reference_noise: f64) -> anyhow::Result<()> {
-    // plotters' ab_glyph backend cannot see system fonts: register the bundled one.
-    let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    adaptive_pm::experiments::plot::register_font()?;
     let pts: Vec<(f64, f64)> = rows
         .iter()
         .map(|r| (r.total_s(), r.rel_rmse))
