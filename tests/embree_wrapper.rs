@@ -9,7 +9,7 @@
 
 use adaptive_pm::embree::{
     measure_throughput, thread_pool, BatchKernel, CommittedScene, Device, Hit, Ray, SceneBuilder,
-    DEFAULT_BATCH_KERNEL,
+    DEFAULT_BATCH_KERNEL, EMBREE_LARGE,
 };
 use adaptive_pm::rng::Rng;
 use adaptive_pm::sampling::spherical_direction;
@@ -155,7 +155,19 @@ fn invalid_rays_miss_instead_of_reaching_embree() {
             tfar: f32::NAN,
             ..good
         },
+        // Finite but beyond Embree's range: it would assert and abort.
+        Ray::new(Vec3::new(1e20, 0.0, 0.0), Vec3::X),
+        Ray::new(Vec3::ZERO, Vec3::new(0.0, -1e20, 0.0)),
+        Ray::new(Vec3::new(0.0, 0.0, 2.0 * EMBREE_LARGE), Vec3::NEG_Z),
     ];
+    // Invalid rays beside valid ones in one packet: the valid lanes still hit.
+    let mut mixed = bad.to_vec();
+    mixed.insert(3, good);
+    let mut hits = vec![None; mixed.len()];
+    scene.intersect_batch_with(BatchKernel::Packet16, &mixed, &mut hits);
+    for (ray, hit) in mixed.iter().zip(&hits) {
+        assert_eq!(hit.is_some(), *ray == good, "{ray:?}");
+    }
     for ray in bad {
         assert!(scene.intersect(&ray).is_none(), "{ray:?}");
         assert!(!scene.occluded(&ray), "{ray:?}");
@@ -240,6 +252,8 @@ fn mixed_rays(n: usize, lo: Vec3, hi: Vec3, seed: u64) -> Vec<Ray> {
             };
             if i % 97 == 0 {
                 ray.dir = Vec3::ZERO; // invalid: must miss in every path
+            } else if i % 89 == 0 {
+                ray.origin.x = 1e20; // beyond Embree's range: likewise
             }
             ray
         })

@@ -25,7 +25,7 @@ pub mod throughput;
 use glam::Vec3;
 
 pub use device::Device;
-pub use scene::{BatchKernel, CommittedScene, SceneBuilder, DEFAULT_BATCH_KERNEL};
+pub use scene::{BatchKernel, CommittedScene, SceneBuilder, DEFAULT_BATCH_KERNEL, EMBREE_LARGE};
 pub use threads::{flush_denormals_enabled, set_flush_denormals, thread_pool};
 pub use throughput::{measure_throughput, Throughput};
 

@@ -9,9 +9,12 @@
 //! - `RTC_SCENE_FLAG_ROBUST`: watertight traversal, so photons do not leak
 //!   through shared edges of a closed room.
 //!
-//! Rays that are invalid for Embree (non-finite origin or direction, zero
-//! direction, `tnear < 0`, `tfar < tnear`, NaN) are never passed to it: they
-//! miss and are not occluded.
+//! Rays that are invalid for Embree (non-finite origin or direction, a
+//! coordinate beyond [`EMBREE_LARGE`], zero direction, `tnear < 0`,
+//! `tfar < tnear`, NaN) are never passed to it: they miss and are not
+//! occluded. Not even in a masked packet lane: Embree 3.13's 8-wide hybrid
+//! kernel asserts on every lane it loads (SIGABRT), so a masked lane holds a
+//! harmless placeholder ray instead of the invalid one.
 
 use std::ptr::NonNull;
 use std::sync::Arc;
@@ -286,11 +289,18 @@ impl std::fmt::Debug for CommittedScene {
     }
 }
 
+/// Embree's `FLT_LARGE` (`common/math/constants.h`): `RayK::valid()`
+/// asserts that every origin and direction coordinate is at most this in
+/// magnitude. A ray beyond it aborts the process, so it never reaches Embree.
+pub const EMBREE_LARGE: f32 = 1.844e18;
+
 /// Whether Embree may be given this ray (see the module docs).
 #[inline]
-fn is_valid(ray: &Ray) -> bool {
-    ray.origin.is_finite()
-        && ray.dir.is_finite()
+pub(crate) fn is_valid(ray: &Ray) -> bool {
+    // `abs() <= EMBREE_LARGE` is false for NaN and infinities too.
+    let in_range = |v: Vec3| v.abs().cmple(Vec3::splat(EMBREE_LARGE)).all();
+    in_range(ray.origin)
+        && in_range(ray.dir)
         && ray.dir != Vec3::ZERO
         && ray.tnear >= 0.0
         && ray.tnear <= ray.tfar
@@ -342,12 +352,10 @@ struct ValidMask([i32; PACKET]);
 #[inline]
 fn fill_packet(rays: &[Ray], p: &mut sys::RTCRay16, valid: &mut ValidMask) {
     for lane in 0..PACKET {
-        let r = rays.get(lane);
-        valid.0[lane] = if r.is_some_and(is_valid) { -1 } else { 0 };
-        let r = match r {
-            Some(r) => *r,
-            None => Ray::new(Vec3::ZERO, Vec3::Z),
-        };
+        // An invalid ray is replaced, not only masked (see the module docs).
+        let r = rays.get(lane).copied().filter(is_valid);
+        valid.0[lane] = if r.is_some() { -1 } else { 0 };
+        let r = r.unwrap_or_else(|| Ray::new(Vec3::ZERO, Vec3::Z));
         p.org_x[lane] = r.origin.x;
         p.org_y[lane] = r.origin.y;
         p.org_z[lane] = r.origin.z;
