@@ -111,7 +111,6 @@ fn output_targets_that_are_not_regular_files_are_refused() {
 #[test]
 fn safe_writes_replace_whole_files_and_refuse_devices() {
     use adaptive_pm::output::{write_bytes, write_with};
-    use std::io::Write;
     let tmp = tempfile::tempdir().unwrap();
     let p = tmp.path().join("out.csv");
     write_bytes(&p, b"first").unwrap();

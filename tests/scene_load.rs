@@ -132,7 +132,8 @@ fn bad_cosn_exponents_are_rejected() {
     let mut doc = cornell_json();
     doc["materials"][3]["extras"]["cosn"] = json!(50.0);
     let p = write(dir.path(), "ok.gltf", doc.to_string().as_bytes());
-    let Light::Area(l) = &Scene::load(&p).unwrap().lights[0] else {
+    let loaded = Scene::load(&p).unwrap();
+    let Light::Area(l) = &loaded.lights()[0] else {
         unreachable!()
     };
     assert_eq!(l.emission.profile.exponent(), 50.0);

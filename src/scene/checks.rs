@@ -27,7 +27,7 @@ pub(super) fn check_positions(name: &str, positions: &[Vec3]) -> Result<()> {
     match positions.iter().position(|&p| !in_range(p)) {
         None => Ok(()),
         Some(i) => Err(bad(format!(
-            "mesh `{name}` has vertex {i} at {}, not finite or beyond {MAX_COORDINATE:e}",
+            "mesh `{name}` has vertex {i} at {}: non-finite or beyond {MAX_COORDINATE:e}",
             positions[i]
         ))),
     }
