@@ -27,7 +27,10 @@ fn io_err(path: &Path, source: std::io::Error) -> Error {
 }
 
 fn invalid(path: &Path, msg: &str) -> Error {
-    io_err(path, std::io::Error::new(std::io::ErrorKind::InvalidInput, msg.to_string()))
+    io_err(
+        path,
+        std::io::Error::new(std::io::ErrorKind::InvalidInput, msg.to_string()),
+    )
 }
 
 fn parent_of(path: &Path) -> PathBuf {
@@ -76,10 +79,7 @@ fn create_temp(path: &Path) -> Result<(PathBuf, File)> {
         .map_or(0, |d| d.subsec_nanos());
     for _ in 0..64 {
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let tmp = parent.join(format!(
-            ".{name}.tmp-{}-{n}-{nanos:x}",
-            std::process::id()
-        ));
+        let tmp = parent.join(format!(".{name}.tmp-{}-{n}-{nanos:x}", std::process::id()));
         match OpenOptions::new().write(true).create_new(true).open(&tmp) {
             Ok(f) => return Ok((tmp, f)),
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,

@@ -266,16 +266,18 @@ fn quality_zero_is_an_empty_map_and_one_is_a_budget_error() {
 #[test]
 fn lights_a_million_times_apart_both_emit_and_a_dark_light_does_not() {
     let mut scene = closed_box(0.5, 0.0);
-    scene.add_light(Light::Point(PointLight {
-        position: Vec3::splat(0.5),
-        intensity: Vec3::splat(1e-5),
-    }))
-    .unwrap();
-    scene.add_light(Light::Point(PointLight {
-        position: Vec3::new(0.5, 0.2, 0.5),
-        intensity: Vec3::ZERO,
-    }))
-    .unwrap();
+    scene
+        .add_light(Light::Point(PointLight {
+            position: Vec3::splat(0.5),
+            intensity: Vec3::splat(1e-5),
+        }))
+        .unwrap();
+    scene
+        .add_light(Light::Point(PointLight {
+            position: Vec3::new(0.5, 0.2, 0.5),
+            intensity: Vec3::ZERO,
+        }))
+        .unwrap();
     for mode in [Mode::Classic, Mode::Density, Mode::Adaptive] {
         let (out, _) = run(&scene, &cfg(mode, 10_000, 1), 2);
         let per = &out.report.emitted_per_light;

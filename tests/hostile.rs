@@ -47,20 +47,41 @@ fn base_scene_loads() {
 
 #[test]
 fn what_panicked_in_the_gltf_crate_is_an_error() {
-    expect("position_accessor_99.gltf", &["mesh 0 (`floor`) primitive 0", "index 99"]);
-    expect("index_accessor_float.gltf", &["accessor 1 (`idx`)", "unsigned integer"]);
-    expect("byte_stride_4_on_vec3.gltf", &["accessor 0 (`pos`)", "byteStride is 4"]);
-    expect("camera_perspective_without_object.gltf", &["camera 0", "perspective"]);
-    expect("camera_orthographic_without_object.gltf", &["camera 0", "orthographic"]);
+    expect(
+        "position_accessor_99.gltf",
+        &["mesh 0 (`floor`) primitive 0", "index 99"],
+    );
+    expect(
+        "index_accessor_float.gltf",
+        &["accessor 1 (`idx`)", "unsigned integer"],
+    );
+    expect(
+        "byte_stride_4_on_vec3.gltf",
+        &["accessor 0 (`pos`)", "byteStride is 4"],
+    );
+    expect(
+        "camera_perspective_without_object.gltf",
+        &["camera 0", "perspective"],
+    );
+    expect(
+        "camera_orthographic_without_object.gltf",
+        &["camera 0", "orthographic"],
+    );
     expect("mesh_index_out_of_range.gltf", &["node 0 (`floor`)", "7"]);
 }
 
 #[test]
 fn what_aborted_embree_is_an_error_naming_the_node() {
     expect("vertex_at_1e20.gltf", &["node 0 (`floor`)", "beyond"]);
-    expect("point_light_at_1e20.gltf", &["node 3 (`far-light`)", "beyond"]);
+    expect(
+        "point_light_at_1e20.gltf",
+        &["node 3 (`far-light`)", "beyond"],
+    );
     expect("camera_at_1e20.gltf", &["node 2 (`eye`)", "camera eye"]);
-    expect("spot_light_scale_0.gltf", &["node 3 (`spot-node`)", "unit vector"]);
+    expect(
+        "spot_light_scale_0.gltf",
+        &["node 3 (`spot-node`)", "unit vector"],
+    );
     expect("transform_overflow.gltf", &["node 0 (`floor`)"]);
 }
 
@@ -69,9 +90,18 @@ fn hangs_and_unbounded_memory_are_errors() {
     expect("node_cycle_self.gltf", &["node 0 (`floor`)", "cycle"]);
     expect("node_cycle_ab.gltf", &["cycle"]);
     expect("node_dag_40_levels.gltf", &["scene 0", "node instances"]);
-    expect("sparse_count_2p31.gltf", &["accessor 0 (`sparse`)", "2147483648"]);
-    expect("accessor_count_huge.gltf", &["accessor 0 (`pos`)", "1099511627776 elements"]);
-    expect("buffer_byte_length_2p40.gltf", &["buffers declare", "limit"]);
+    expect(
+        "sparse_count_2p31.gltf",
+        &["accessor 0 (`sparse`)", "2147483648"],
+    );
+    expect(
+        "accessor_count_huge.gltf",
+        &["accessor 0 (`pos`)", "1099511627776 elements"],
+    );
+    expect(
+        "buffer_byte_length_2p40.gltf",
+        &["buffers declare", "limit"],
+    );
     expect("buffer_uri_dev_zero.gltf", &["`/dev/zero`", "absolute"]);
 }
 
@@ -85,12 +115,18 @@ fn a_fifo_or_a_device_inside_the_folder_is_not_read() {
     // SAFETY: mkfifo reads a valid NUL-terminated path.
     assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
     let msg = error_of(&scene);
-    assert!(msg.contains("`fifo.bin`") && msg.contains("not a regular file"), "{msg}");
+    assert!(
+        msg.contains("`fifo.bin`") && msg.contains("not a regular file"),
+        "{msg}"
+    );
     // A symbolic link to a device, inside the folder, resolves outside it.
     std::fs::remove_file(&fifo).unwrap();
     std::os::unix::fs::symlink("/dev/zero", &fifo).unwrap();
     let msg = error_of(&scene);
-    assert!(msg.contains("`fifo.bin`") && msg.contains("outside"), "{msg}");
+    assert!(
+        msg.contains("`fifo.bin`") && msg.contains("outside"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -105,16 +141,28 @@ fn no_file_outside_the_scene_folder_is_read() {
         let msg = error_of(&dir().join(name));
         assert!(msg.contains("buffer 0 uri `"), "{name}: {msg}");
         // Never the size or the bytes of the file it named.
-        assert!(!msg.contains("root") && !msg.contains("bytes"), "{name}: {msg}");
+        assert!(
+            !msg.contains("root") && !msg.contains("bytes"),
+            "{name}: {msg}"
+        );
     }
 }
 
 #[test]
 fn messages_say_what_is_wrong() {
     let msg = error_of(&dir().join("accessor_past_buffer.gltf"));
-    assert!(msg.contains("accessor 0 (`pos`)") && !msg.contains("no POSITION"), "{msg}");
-    expect("degenerate_only_mesh.gltf", &["mesh `floor#0`", "degenerate"]);
-    expect("spot_cone_0.gltf", &["light 0 (`spot`)", "outerConeAngle 0"]);
+    assert!(
+        msg.contains("accessor 0 (`pos`)") && !msg.contains("no POSITION"),
+        "{msg}"
+    );
+    expect(
+        "degenerate_only_mesh.gltf",
+        &["mesh `floor#0`", "degenerate"],
+    );
+    expect(
+        "spot_cone_0.gltf",
+        &["light 0 (`spot`)", "outerConeAngle 0"],
+    );
     expect("camera_yfov_0.gltf", &["camera 0", "yfov 0"]);
 }
 
@@ -127,7 +175,11 @@ fn fuzzer_finds_replay_without_panic() {
         let name = p.file_name().unwrap().to_string_lossy().into_owned();
         if name.starts_with("crash-") || name.starts_with("fuzz-") {
             let copy = tempfile::tempdir().unwrap();
-            let ext = if std::fs::read(&p).unwrap().starts_with(b"glTF") { "glb" } else { "gltf" };
+            let ext = if std::fs::read(&p).unwrap().starts_with(b"glTF") {
+                "glb"
+            } else {
+                "gltf"
+            };
             let target = copy.path().join(format!("scene.{ext}"));
             std::fs::copy(&p, &target).unwrap();
             if let Ok(s) = Scene::load(&target) {
@@ -145,14 +197,26 @@ fn scenes_built_in_code_refuse_what_would_panic_later() {
     let mut s = Scene::new();
     let white = s.add_material(Material {
         name: "white".into(),
-        brdf: Brdf::Lambert(Lambert { albedo: Vec3::splat(0.5) }),
+        brdf: Brdf::Lambert(Lambert {
+            albedo: Vec3::splat(0.5),
+        }),
         emission: None,
     });
     let tri = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
     let bad = |r: Result<usize, Error>| matches!(r, Err(Error::InvalidScene(_)));
     assert!(bad(s.add_mesh("m", tri.clone(), vec![[0, 1, 2]], 7)));
-    assert!(bad(s.add_mesh("m", vec![Vec3::NAN, Vec3::X, Vec3::Y], vec![[0, 1, 2]], white)));
-    assert!(bad(s.add_mesh("m", vec![Vec3::splat(1e20), Vec3::X, Vec3::Y], vec![[0, 1, 2]], white)));
+    assert!(bad(s.add_mesh(
+        "m",
+        vec![Vec3::NAN, Vec3::X, Vec3::Y],
+        vec![[0, 1, 2]],
+        white
+    )));
+    assert!(bad(s.add_mesh(
+        "m",
+        vec![Vec3::splat(1e20), Vec3::X, Vec3::Y],
+        vec![[0, 1, 2]],
+        white
+    )));
     assert!(bad(s.add_mesh("m", tri.clone(), vec![[0, 1, 3]], white)));
     assert!(bad(s.add_mesh("m", tri.clone(), vec![[0, 1, 1]], white)));
     let nan_albedo = s.add_material(Material {
@@ -160,9 +224,20 @@ fn scenes_built_in_code_refuse_what_would_panic_later() {
         brdf: Brdf::Lambert(Lambert { albedo: Vec3::NAN }),
         emission: None,
     });
-    assert!(bad(s.add_mesh("m", tri.clone(), vec![[0, 1, 2]], nan_albedo)));
-    assert!(bad(s.add_light(Light::Point(PointLight { position: Vec3::splat(1e20), intensity: Vec3::ONE }))));
-    assert!(bad(s.add_light(Light::Point(PointLight { position: Vec3::ZERO, intensity: Vec3::splat(f32::MAX) }))));
+    assert!(bad(s.add_mesh(
+        "m",
+        tri.clone(),
+        vec![[0, 1, 2]],
+        nan_albedo
+    )));
+    assert!(bad(s.add_light(Light::Point(PointLight {
+        position: Vec3::splat(1e20),
+        intensity: Vec3::ONE
+    }))));
+    assert!(bad(s.add_light(Light::Point(PointLight {
+        position: Vec3::ZERO,
+        intensity: Vec3::splat(f32::MAX)
+    }))));
     let spot = SpotLight {
         position: Vec3::ZERO,
         direction: Vec3::NAN,
@@ -177,7 +252,12 @@ fn scenes_built_in_code_refuse_what_would_panic_later() {
     assert!(s.meshes().is_empty() && s.lights().is_empty() && s.camera().is_none());
     // A dropped degenerate triangle: hits map back to the caller's index.
     let m = s
-        .add_mesh("two", vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE], vec![[0, 0, 1], [0, 1, 2]], white)
+        .add_mesh(
+            "two",
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE],
+            vec![[0, 0, 1], [0, 1, 2]],
+            white,
+        )
         .unwrap();
     assert_eq!(s.skipped_degenerate(), 1);
     assert_eq!(s.source_triangle(m as u32, 0), Some(1));
@@ -206,7 +286,8 @@ fn any_n_max_over_two_lights_traces_or_is_refused() {
     let rt = scene.commit(&device).unwrap();
     // `run` takes an `Fn`: the tracer (and its analysis cache) sits in a RefCell.
     let tracer = std::cell::RefCell::new(Tracer::new(&scene, &rt));
-    let mut runner = proptest::test_runner::TestRunner::new(proptest::test_runner::Config::with_cases(32));
+    let mut runner =
+        proptest::test_runner::TestRunner::new(proptest::test_runner::Config::with_cases(32));
     let n_max = prop_oneof![0u64..2000, any::<u64>(), (u64::MAX - 8)..=u64::MAX];
     runner
         .run(&(n_max, 0usize..3), |(n, m)| {

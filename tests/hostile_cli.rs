@@ -8,7 +8,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn hostile(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/hostile").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/hostile")
+        .join(name)
 }
 
 /// Runs the CLI under a 2 GiB address-space limit.
@@ -71,7 +73,14 @@ fn hostile_numbers_are_refused() {
     refused(&out, &["not a finite number"]);
     let tmp = tempfile::tempdir().unwrap();
     let exr = tmp.path().join("a.exr");
-    let out = run_limited(&["render", base, "--out", exr.to_str().unwrap(), "--exposure", "nan"]);
+    let out = run_limited(&[
+        "render",
+        base,
+        "--out",
+        exr.to_str().unwrap(),
+        "--exposure",
+        "nan",
+    ]);
     refused(&out, &["not a finite number"]);
     assert!(!exr.exists());
 }
@@ -100,9 +109,18 @@ fn output_targets_that_are_not_regular_files_are_refused() {
         ]);
         refused(&out, &[]);
     }
-    assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
-    assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
-    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    assert!(std::fs::metadata("/dev/null")
+        .unwrap()
+        .file_type()
+        .is_char_device());
+    assert!(std::fs::symlink_metadata(&fifo)
+        .unwrap()
+        .file_type()
+        .is_fifo());
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
     // No temporary file is left behind.
     let left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().collect();
     assert_eq!(left.len(), 2);
@@ -127,5 +145,8 @@ fn safe_writes_replace_whole_files_and_refuse_devices() {
     assert!(write_bytes("/dev/null", b"x").is_err());
     assert!(write_bytes(tmp.path(), b"x").is_err());
     assert!(write_bytes(tmp.path().join("missing/out.csv"), b"x").is_err());
-    assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+    assert!(std::fs::metadata("/dev/null")
+        .unwrap()
+        .file_type()
+        .is_char_device());
 }

@@ -70,7 +70,9 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
     if threads > max {
         return Err(Error::param(
             "threads",
-            format!("{threads} is more than {MAX_THREADS_PER_CORE} per available core (at most {max})"),
+            format!(
+                "{threads} is more than {MAX_THREADS_PER_CORE} per available core (at most {max})"
+            ),
         ));
     }
     rayon::ThreadPoolBuilder::new()

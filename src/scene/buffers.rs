@@ -36,7 +36,11 @@ fn refuse(i: usize, uri: &str, why: &str) -> Error {
 
 /// Loads every buffer of `root`; `blob` is the GLB binary chunk, `base` the
 /// scene file's folder (`None` when loading from memory: no external files).
-pub(super) fn load_buffers(root: &Root, blob: Option<Vec<u8>>, base: Option<&Path>) -> Result<Vec<Vec<u8>>> {
+pub(super) fn load_buffers(
+    root: &Root,
+    blob: Option<Vec<u8>>,
+    base: Option<&Path>,
+) -> Result<Vec<Vec<u8>>> {
     let total = root
         .buffers
         .iter()
@@ -52,7 +56,9 @@ pub(super) fn load_buffers(root: &Root, blob: Option<Vec<u8>>, base: Option<&Pat
         let want = b.byte_length.0;
         let data = match b.uri.as_deref() {
             None => blob.take().ok_or_else(|| {
-                Error::InvalidScene(format!("buffer {i} has no uri and there is no GLB binary chunk"))
+                Error::InvalidScene(format!(
+                    "buffer {i} has no uri and there is no GLB binary chunk"
+                ))
             })?,
             Some(uri) if uri.starts_with("data:") => decode_data_uri(i, uri)?,
             Some(uri) => read_file(i, uri, want, base)?,
@@ -71,8 +77,7 @@ fn decode_data_uri(i: usize, uri: &str) -> Result<Vec<u8>> {
     let Some((_, payload)) = uri.split_once(";base64,") else {
         return Err(refuse(i, uri, "only base64 data URIs are supported"));
     };
-    base64::decode(payload)
-        .map_err(|_| refuse(i, uri, "invalid base64"))
+    base64::decode(payload).map_err(|_| refuse(i, uri, "invalid base64"))
 }
 
 /// Percent-decodes a URI path; `None` on a malformed escape, a NUL or bad UTF-8.
@@ -99,7 +104,10 @@ pub fn percent_decode(s: &str) -> Option<String> {
 /// The path of a relative URI inside `base`, normalised; `Err` names why not.
 pub fn resolve_inside(uri: &str, base: &Path) -> std::result::Result<PathBuf, &'static str> {
     let scheme = uri.split_once(':').is_some_and(|(s, _)| {
-        !s.is_empty() && !s.contains(['/', '\\']) && s.chars().all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c))
+        !s.is_empty()
+            && !s.contains(['/', '\\'])
+            && s.chars()
+                .all(|c| c.is_ascii_alphanumeric() || "+-.".contains(c))
     });
     if scheme {
         return Err("URI schemes (file://, http://, ...) are not read; use a relative path");
@@ -113,7 +121,9 @@ pub fn resolve_inside(uri: &str, base: &Path) -> std::result::Result<PathBuf, &'
         match part {
             "" | "." => {}
             ".." => {
-                parts.pop().ok_or("the path leaves the scene file's folder")?;
+                parts
+                    .pop()
+                    .ok_or("the path leaves the scene file's folder")?;
             }
             p => parts.push(p),
         }
@@ -123,7 +133,10 @@ pub fn resolve_inside(uri: &str, base: &Path) -> std::result::Result<PathBuf, &'
     }
     let mut out = base.to_path_buf();
     for p in parts {
-        if Path::new(p).components().any(|c| !matches!(c, Component::Normal(_))) {
+        if Path::new(p)
+            .components()
+            .any(|c| !matches!(c, Component::Normal(_)))
+        {
             return Err("the path leaves the scene file's folder");
         }
         out.push(p);
@@ -139,7 +152,11 @@ fn read_file(i: usize, uri: &str, want: u64, base: Option<&Path>) -> Result<Vec<
     let real = path.canonicalize().map_err(|_| not_found())?;
     let real_base = base.canonicalize().map_err(|_| not_found())?;
     if !real.starts_with(&real_base) {
-        return Err(refuse(i, uri, "it resolves outside the scene file's folder"));
+        return Err(refuse(
+            i,
+            uri,
+            "it resolves outside the scene file's folder",
+        ));
     }
     let regular = |m: &std::fs::Metadata| m.file_type().is_file();
     // Checked before opening: opening a FIFO would block.
@@ -152,7 +169,11 @@ fn read_file(i: usize, uri: &str, want: u64, base: Option<&Path>) -> Result<Vec<
         return Err(refuse(i, uri, "not a regular file"));
     }
     if meta.len() < want {
-        return Err(refuse(i, uri, "the file is shorter than the buffer's byteLength"));
+        return Err(refuse(
+            i,
+            uri,
+            "the file is shorter than the buffer's byteLength",
+        ));
     }
     let mut data = Vec::with_capacity(want as usize);
     file.take(want)

@@ -58,7 +58,10 @@ pub(super) struct Kept {
     pub len_dropped: usize,
 }
 
-pub(super) fn drop_degenerate(positions: &[Vec3], indices: Vec<[u32; 3]>) -> (Vec<[u32; 3]>, Option<Kept>) {
+pub(super) fn drop_degenerate(
+    positions: &[Vec3],
+    indices: Vec<[u32; 3]>,
+) -> (Vec<[u32; 3]>, Option<Kept>) {
     let good = |t: &[u32; 3]| {
         let [a, b, c] = t.map(|i| positions[i as usize]);
         let n = (b - a).cross(c - a);
@@ -112,7 +115,9 @@ pub(super) fn check_punctual(light: &Light) -> Result<()> {
                     s.direction
                 )));
             }
-            let ordered = (-1.0..1.0).contains(&s.cos_outer) && s.cos_outer < s.cos_inner && s.cos_inner <= 1.0;
+            let ordered = (-1.0..1.0).contains(&s.cos_outer)
+                && s.cos_outer < s.cos_inner
+                && s.cos_inner <= 1.0;
             if !ordered {
                 return Err(bad(format!(
                     "spot light cone cosines inner {} outer {} are not -1 <= outer < inner <= 1",

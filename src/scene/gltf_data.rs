@@ -88,13 +88,19 @@ pub(super) fn check_data(root: &Root, buffers: &[Vec<u8>]) -> Result<()> {
                 )));
             }
             let (voff, vlen, _) = views[s.values.buffer_view.value()];
-            let vend = add(add(voff, s.values.byte_offset.0, &name)?, mul(n, elem, &name)?, &name)?;
+            let vend = add(
+                add(voff, s.values.byte_offset.0, &name)?,
+                mul(n, elem, &name)?,
+                &name,
+            )?;
             if vend > add(voff, vlen, &name)? {
                 return Err(bad(format!(
                     "{name}: its {n} sparse values run past their bufferView"
                 )));
             }
-            let buffer = &buffers[root.buffer_views[s.indices.buffer_view.value()].buffer.value()];
+            let buffer = &buffers[root.buffer_views[s.indices.buffer_view.value()]
+                .buffer
+                .value()];
             check_sparse_indices(&name, &buffer[istart as usize..iend as usize], ict.0, count)?;
         }
     }

@@ -67,14 +67,21 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
     // The graph is acyclic and its expansion bounded (validate::check_document).
     while let Some((node, parent)) = stack.pop() {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        load_node(&mut scene, &node, &world, &buffers, &material_ids, &mut default_material)
-            .map_err(|e| match e {
-                Error::InvalidScene(m) => Error::InvalidScene(format!(
-                    "{}: {m}",
-                    super::validate::label("node", node.index(), node.name())
-                )),
-                other => other,
-            })?;
+        load_node(
+            &mut scene,
+            &node,
+            &world,
+            &buffers,
+            &material_ids,
+            &mut default_material,
+        )
+        .map_err(|e| match e {
+            Error::InvalidScene(m) => Error::InvalidScene(format!(
+                "{}: {m}",
+                super::validate::label("node", node.index(), node.name())
+            )),
+            other => other,
+        })?;
         let first_child = stack.len();
         stack.extend(node.children().map(|c| (c, world)));
         stack[first_child..].reverse();
@@ -94,7 +101,9 @@ fn load_node(
     default_material: &mut Option<usize>,
 ) -> Result<()> {
     if !world.is_finite() {
-        return Err(Error::InvalidScene("its world transform is not finite".into()));
+        return Err(Error::InvalidScene(
+            "its world transform is not finite".into(),
+        ));
     }
     if let Some(mesh) = node.mesh() {
         let mesh_label = super::validate::label("mesh", mesh.index(), mesh.name());

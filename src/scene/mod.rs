@@ -207,7 +207,10 @@ impl Scene {
         checks::check_material(mat)?;
         checks::check_positions(&name, &positions)?;
         let n = positions.len() as u64;
-        if let Some(t) = indices.iter().position(|t| t.iter().any(|&i| i as u64 >= n)) {
+        if let Some(t) = indices
+            .iter()
+            .position(|t| t.iter().any(|&i| i as u64 >= n))
+        {
             // The index values are not shown: they may be bytes of any file.
             return Err(Error::InvalidScene(format!(
                 "mesh `{name}` has triangle {t} indexing past its {n} vertices"
@@ -221,7 +224,9 @@ impl Scene {
             )));
         }
         if indices.is_empty() {
-            return Err(Error::InvalidScene(format!("mesh `{name}` has no triangle")));
+            return Err(Error::InvalidScene(format!(
+                "mesh `{name}` has no triangle"
+            )));
         }
         let emission = mat.emission;
         let mesh = Mesh {

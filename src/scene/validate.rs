@@ -41,7 +41,9 @@ fn index_ok<T>(what: &str, idx: json::Index<T>, len: usize) -> Result<usize> {
     if i < len {
         Ok(i)
     } else {
-        Err(bad(format!("{what} refers to index {i}, but there are only {len}")))
+        Err(bad(format!(
+            "{what} refers to index {i}, but there are only {len}"
+        )))
     }
 }
 
@@ -82,8 +84,16 @@ pub(super) fn check_document(root: &Root) -> Result<()> {
             )));
         }
         if let Some(s) = &a.sparse {
-            index_ok(&format!("{name} sparse indices"), s.indices.buffer_view, root.buffer_views.len())?;
-            index_ok(&format!("{name} sparse values"), s.values.buffer_view, root.buffer_views.len())?;
+            index_ok(
+                &format!("{name} sparse indices"),
+                s.indices.buffer_view,
+                root.buffer_views.len(),
+            )?;
+            index_ok(
+                &format!("{name} sparse values"),
+                s.values.buffer_view,
+                root.buffer_views.len(),
+            )?;
             if !matches!(s.indices.component_type, Checked::Valid(_)) {
                 return Err(bad(format!("{name} has sparse indices of an unknown type")));
             }
@@ -100,7 +110,10 @@ pub(super) fn check_document(root: &Root) -> Result<()> {
         index_ok(&name, v.buffer, root.buffers.len())?;
         if let Some(s) = v.byte_stride {
             if !(4..=252).contains(&s.0) || s.0 % 4 != 0 {
-                return Err(bad(format!("{name} has byteStride {}, not a multiple of 4 in 4..=252", s.0)));
+                return Err(bad(format!(
+                    "{name} has byteStride {}, not a multiple of 4 in 4..=252",
+                    s.0
+                )));
             }
         }
     }
@@ -146,7 +159,11 @@ fn check_mesh(root: &Root, i: usize, m: &json::Mesh) -> Result<()> {
             let Checked::Valid(sem) = sem else {
                 return Err(bad(format!("{here} has an attribute of unknown semantic")));
             };
-            let ai = index_ok(&format!("{here} attribute {sem:?}"), a, root.accessors.len())?;
+            let ai = index_ok(
+                &format!("{here} attribute {sem:?}"),
+                a,
+                root.accessors.len(),
+            )?;
             if *sem == json::mesh::Semantic::Positions {
                 let acc = &root.accessors[ai];
                 let ok = matches!(
@@ -193,7 +210,9 @@ fn check_camera(i: usize, c: &json::Camera) -> Result<()> {
     match c.type_ {
         Checked::Valid(T::Perspective) => {
             let Some(p) = &c.perspective else {
-                return Err(bad(format!("{name} is perspective but has no `perspective` object")));
+                return Err(bad(format!(
+                    "{name} is perspective but has no `perspective` object"
+                )));
             };
             if !(p.yfov.is_finite() && p.yfov > 0.0 && p.yfov < std::f32::consts::PI) {
                 return Err(bad(format!("{name} has yfov {}, outside (0, pi)", p.yfov)));
@@ -218,15 +237,21 @@ fn check_light(i: usize, l: &json::extensions::scene::khr_lights_punctual::Light
         Checked::Invalid => Err(bad(format!("{name} has an unknown type"))),
         Checked::Valid(T::Spot) => {
             let Some(s) = &l.spot else {
-                return Err(bad(format!("{name} is a spot light without a `spot` object")));
+                return Err(bad(format!(
+                    "{name} is a spot light without a `spot` object"
+                )));
             };
             let (inner, outer) = (s.inner_cone_angle, s.outer_cone_angle);
             let half = std::f32::consts::FRAC_PI_2;
             if !(outer.is_finite() && outer > 0.0 && outer <= half) {
-                return Err(bad(format!("{name} has outerConeAngle {outer}, outside (0, pi/2]")));
+                return Err(bad(format!(
+                    "{name} has outerConeAngle {outer}, outside (0, pi/2]"
+                )));
             }
             if !(inner.is_finite() && (0.0..outer).contains(&inner)) {
-                return Err(bad(format!("{name} has innerConeAngle {inner}, outside [0, {outer})")));
+                return Err(bad(format!(
+                    "{name} has innerConeAngle {inner}, outside [0, {outer})"
+                )));
             }
             Ok(())
         }
@@ -245,7 +270,11 @@ fn check_node(root: &Root, i: usize, n: &json::Node, lights: usize) -> Result<()
     for &c in n.children.iter().flatten() {
         index_ok(&format!("{name} child"), c, root.nodes.len())?;
     }
-    if let Some(l) = n.extensions.as_ref().and_then(|e| e.khr_lights_punctual.as_ref()) {
+    if let Some(l) = n
+        .extensions
+        .as_ref()
+        .and_then(|e| e.khr_lights_punctual.as_ref())
+    {
         index_ok(&format!("{name} light"), l.light, lights)?;
     }
     let finite = n.matrix.iter().flatten().all(|x| x.is_finite())
