@@ -164,10 +164,9 @@ fn raw(scene: &CommittedScene, rays: &[Ray]) -> usize {
 
 /// `bench rays`' incoherent rays on any scene's surfaces.
 fn surface_rays(scene: &Scene) -> Vec<Ray> {
-    let (lo, hi) = scene.bounds();
     scene
         .surface_sampler()
-        .incoherent_rays(RAYS, 1, 1e-5 * (hi - lo).length())
+        .incoherent_rays(RAYS, 1, scene.ray_epsilon())
 }
 
 fn bench_rays(c: &mut Criterion) {

@@ -20,18 +20,18 @@ fn a_ray_down_from_the_light_centre_hits_the_floor_below() {
     assert!((hit.t - 548.0).abs() < 1e-3);
     assert!(hit.ng.y.abs() > 0.9999);
     let floor = scene
-        .meshes
+        .meshes()
         .iter()
         .position(|m| m.name.starts_with("floor"))
         .unwrap();
     assert_eq!(hit.geom_id as usize, floor);
-    assert_eq!(hit.material as usize, scene.meshes[floor].material);
+    assert_eq!(hit.material as usize, scene.meshes()[floor].material);
     // upwards from the floor, the first thing is the light (0.1 below the ceiling)
     let up = rt
         .intersect(&Ray::new(Vec3::new(278.0, 1.0, 279.5), Vec3::Y))
         .unwrap();
     assert!((up.t - 547.7).abs() < 1e-3, "{}", up.t);
-    assert!(scene.materials[up.material as usize].emission.is_some());
+    assert!(scene.materials()[up.material as usize].emission.is_some());
 }
 
 #[test]
@@ -40,7 +40,7 @@ fn the_box_closed_by_a_front_wall_traps_every_ray() {
     // With a front wall added, 1e5 random rays from inside must all hit something.
     let mut scene = Scene::cornell().unwrap();
     let white = scene
-        .materials
+        .materials()
         .iter()
         .position(|m| m.name == "white")
         .unwrap();

@@ -93,7 +93,7 @@ fn cfg(mode: Mode, n: u64, seed: u64) -> TraceConfig {
 fn stored_power_per_depth_is_phi_rho_to_the_d() {
     let rho = 0.5f32;
     let scene = closed_box(rho, 0.0);
-    let phi = adaptive_pm::sampling::luminance(scene.lights[0].power()) as f64;
+    let phi = adaptive_pm::sampling::luminance(scene.lights()[0].power()) as f64;
     let n = 20_000u64;
     for mode in [Mode::Classic, Mode::Adaptive] {
         let mut c = cfg(mode, n, 3);
@@ -266,14 +266,18 @@ fn quality_zero_is_an_empty_map_and_one_is_a_budget_error() {
 #[test]
 fn lights_a_million_times_apart_both_emit_and_a_dark_light_does_not() {
     let mut scene = closed_box(0.5, 0.0);
-    scene.add_light(Light::Point(PointLight {
-        position: Vec3::splat(0.5),
-        intensity: Vec3::splat(1e-5),
-    }));
-    scene.add_light(Light::Point(PointLight {
-        position: Vec3::new(0.5, 0.2, 0.5),
-        intensity: Vec3::ZERO,
-    }));
+    scene
+        .add_light(Light::Point(PointLight {
+            position: Vec3::splat(0.5),
+            intensity: Vec3::splat(1e-5),
+        }))
+        .unwrap();
+    scene
+        .add_light(Light::Point(PointLight {
+            position: Vec3::new(0.5, 0.2, 0.5),
+            intensity: Vec3::ZERO,
+        }))
+        .unwrap();
     for mode in [Mode::Classic, Mode::Density, Mode::Adaptive] {
         let (out, _) = run(&scene, &cfg(mode, 10_000, 1), 2);
         let per = &out.report.emitted_per_light;
@@ -285,7 +289,7 @@ fn lights_a_million_times_apart_both_emit_and_a_dark_light_does_not() {
 #[test]
 fn scene_without_light_is_an_error() {
     let mut scene = closed_box(0.5, 0.0);
-    scene.lights.clear();
+    scene.clear_lights();
     let device = Device::new().unwrap();
     let rt = scene.commit(&device).unwrap();
     let e = Tracer::new(&scene, &rt)

@@ -15,22 +15,22 @@ fn asset() -> PathBuf {
 #[test]
 fn cornell_matches_the_published_box() {
     let s = Scene::cornell().unwrap();
-    assert_eq!(s.meshes.len(), 8);
+    assert_eq!(s.meshes().len(), 8);
     // 6 quads + 2 blocks of 5 quads, 2 triangles each
     assert_eq!(s.triangle_count(), 32);
-    assert_eq!(s.skipped_degenerate, 0);
-    assert_eq!(s.lights.len(), 1);
-    let Light::Area(l) = &s.lights[0] else {
+    assert_eq!(s.skipped_degenerate(), 0);
+    assert_eq!(s.lights().len(), 1);
+    let Light::Area(l) = &s.lights()[0] else {
         panic!("the light is an area light")
     };
     assert!((l.area - 130.0 * 105.0).abs() < 1e-2, "{}", l.area);
     // diffuse: power = pi A L
     let expect = Vec3::new(17.0, 12.0, 4.0) * PI * 130.0 * 105.0;
-    assert!((s.lights[0].power() - expect).abs().max_element() < 1e-3 * expect.max_element());
+    assert!((s.lights()[0].power() - expect).abs().max_element() < 1e-3 * expect.max_element());
     // it faces down
-    let p = s.lights[0].sample(0.3, [0.2, 0.7], [0.1, 0.1]);
+    let p = s.lights()[0].sample(0.3, [0.2, 0.7], [0.1, 0.1]);
     assert!(p.normal.unwrap().y < -0.999 && p.direction.y < 0.0);
-    let cam = s.camera.unwrap();
+    let cam = s.camera().unwrap();
     assert!((cam.eye - Vec3::new(278.0, 273.0, -800.0)).length() < 1e-3);
     assert!((cam.forward - Vec3::Z).length() < 1e-5, "{}", cam.forward);
     assert!((cam.vfov_deg - 39.3077).abs() < 1e-3);
@@ -38,18 +38,18 @@ fn cornell_matches_the_published_box() {
     assert!(
         lo.abs_diff_eq(Vec3::ZERO, 1e-3) && hi.abs_diff_eq(Vec3::new(556.0, 548.8, 559.2), 1e-3)
     );
-    let white = s.materials.iter().find(|m| m.name == "white").unwrap();
+    let white = s.materials().iter().find(|m| m.name == "white").unwrap();
     assert!(white.emission.is_none());
 }
 
 #[test]
 fn cosn_power_is_exact() {
     let mut s = Scene::cornell().unwrap();
-    let p0 = s.lights[0].power();
+    let p0 = s.lights()[0].power();
     for n in [1.0f32, 10.0, 200.0] {
         s.set_cosn(adaptive_pm::emitter::CosN::new(n).unwrap());
         // power scales by 2 / (n + 2) relative to the diffuse light
-        let ratio = s.lights[0].power().x / p0.x;
+        let ratio = s.lights()[0].power().x / p0.x;
         assert!(
             (ratio - 2.0 / (n + 2.0)).abs() < 1e-5,
             "n={n} ratio={ratio}"
@@ -61,11 +61,11 @@ fn cosn_power_is_exact() {
 fn builtin_equals_asset_file() {
     let a = Scene::cornell().unwrap();
     let b = Scene::load(asset()).unwrap();
-    assert_eq!(a.meshes, b.meshes);
-    assert_eq!(a.materials, b.materials);
-    assert_eq!(a.lights, b.lights);
-    assert_eq!(a.camera, b.camera);
-    assert!(matches!(Scene::open("cornell"), Ok(s) if s.meshes == a.meshes));
+    assert_eq!(a.meshes(), b.meshes());
+    assert_eq!(a.materials(), b.materials());
+    assert_eq!(a.lights(), b.lights());
+    assert_eq!(a.camera(), b.camera());
+    assert!(matches!(Scene::open("cornell"), Ok(s) if s.meshes() == a.meshes()));
 }
 
 fn cornell_json() -> serde_json::Value {
@@ -132,7 +132,8 @@ fn bad_cosn_exponents_are_rejected() {
     let mut doc = cornell_json();
     doc["materials"][3]["extras"]["cosn"] = json!(50.0);
     let p = write(dir.path(), "ok.gltf", doc.to_string().as_bytes());
-    let Light::Area(l) = &Scene::load(&p).unwrap().lights[0] else {
+    let loaded = Scene::load(&p).unwrap();
+    let Light::Area(l) = &loaded.lights()[0] else {
         unreachable!()
     };
     assert_eq!(l.emission.profile.exponent(), 50.0);
@@ -201,8 +202,8 @@ fn nan_positions_are_an_error_and_degenerate_triangles_are_skipped() {
     ))
     .unwrap();
     assert_eq!(s.triangle_count(), 2);
-    assert_eq!(s.skipped_degenerate, 2);
-    assert!((s.lights[0].area().unwrap() - 1.0).abs() < 1e-6);
+    assert_eq!(s.skipped_degenerate(), 2);
+    assert!((s.lights()[0].area().unwrap() - 1.0).abs() < 1e-6);
 
     let e = Scene::load(quad_file(dir.path(), &quad, &[0, 1, 7], true)).unwrap_err();
     assert!(matches!(e, Error::InvalidScene(_)), "{e}");
@@ -217,11 +218,11 @@ fn surface_points_are_area_uniform_and_fixed_by_seed() {
     assert_ne!(a[..10], sampler.points(10, 2)[..]);
     // the floor's share of points matches its share of area (binomial tolerance, 5 sigma)
     let floor = s
-        .meshes
+        .meshes()
         .iter()
         .position(|m| m.name.starts_with("floor"))
         .unwrap();
-    let frac = s.meshes[floor].area() as f64 / sampler.total_area();
+    let frac = s.meshes()[floor].area() as f64 / sampler.total_area();
     let got = a.iter().filter(|p| p.mesh == floor).count() as f64 / a.len() as f64;
     let sd = (frac * (1.0 - frac) / a.len() as f64).sqrt();
     assert!((got - frac).abs() < 5.0 * sd, "floor share {got} vs {frac}");

@@ -111,18 +111,18 @@ fn scene_rows(
 ) -> anyhow::Result<()> {
     let scene = Scene::open(name).with_context(|| format!("scene `{name}`"))?;
     let mut seen = std::collections::HashSet::new();
-    for l in &scene.lights {
+    for l in scene.lights() {
         if let Light::Area(a) = l {
             let n = a.emission.profile.exponent();
             if seen.insert(("cosn", n.to_bits() as u64)) {
                 let mut row = emitter_row(&a.emission.profile, est, p)?;
-                row.name = Some(scene.meshes[a.mesh].name.clone());
+                row.name = Some(scene.meshes()[a.mesh].name.clone());
                 rows.push(row);
             }
         }
     }
-    for mesh in &scene.meshes {
-        let m = &scene.materials[mesh.material];
+    for mesh in scene.meshes() {
+        let m = &scene.materials()[mesh.material];
         if seen.insert(("brdf", m.brdf.key())) {
             let mut row = brdf_row(m.brdf.kind(), None, m.brdf, est, p)?;
             row.name = Some(m.name.clone());

@@ -19,7 +19,7 @@ pub struct BudgetArgs {
     #[arg(long, short = 'n')]
     pub n_max: Option<u64>,
     /// Override every area light's cos^n exponent.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_finite)]
     pub cosn: Option<f32>,
     /// Seed of every random number.
     #[arg(long, default_value_t = 1)]
@@ -36,6 +36,27 @@ pub struct BudgetArgs {
     /// Directionality estimator: paper (the paper's clustering) or peak (peak density).
     #[arg(long, default_value = "paper", value_parser = parse_estimator)]
     pub directionality: Estimator,
+}
+
+/// A finite `f32` (clap parser): NaN and infinities are refused with a
+/// message instead of silently giving black images.
+pub fn parse_finite(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        Ok(x) => Err(format!("`{s}` is {x}, not a finite number")),
+        Err(e) => Err(format!("`{s}`: {e}")),
+    }
+}
+
+/// Exposure in stops: finite and within +-64 (`2^64` already saturates
+/// every pixel; beyond, the scale overflows to infinity and the image is NaN).
+pub fn parse_exposure(s: &str) -> Result<f32, String> {
+    let x = parse_finite(s)?;
+    if x.abs() <= 64.0 {
+        Ok(x)
+    } else {
+        Err(format!("`{s}` is outside [-64, 64] stops"))
+    }
 }
 
 pub fn parse_estimator(s: &str) -> Result<Estimator, String> {
@@ -57,7 +78,13 @@ impl BudgetArgs {
         cfg.seed = self.seed;
         cfg.max_depth = self.max_depth;
         cfg.split_cap = self.split_cap;
-        cfg.memory_budget = self.budget_mb.map(|mb| mb << 20);
+        cfg.memory_budget = match self.budget_mb {
+            // Checked: `mb << 20` silently dropped the high bits.
+            Some(mb) => Some(mb.checked_mul(1 << 20).ok_or_else(|| {
+                anyhow::anyhow!("--budget-mb {mb} does not fit in 64 bits of bytes")
+            })?),
+            None => None,
+        };
         cfg.estimator = self.directionality;
         cfg.validate()?;
         Ok(cfg)
@@ -67,7 +94,7 @@ impl BudgetArgs {
 /// Thread count.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ThreadArgs {
-    /// Worker threads (0 = all cores).
+    /// Worker threads (0 = all cores; at most 4 per available core).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
 }
@@ -100,4 +127,102 @@ pub fn progress_bar(show: bool) -> ProgressBar {
             .progress_chars("=> "),
     );
     bar
+}
+
+/// Property tests of the command line's numbers (issue 12): every value is
+/// either accepted and used as given, or refused with a message; never a panic.
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use adaptive_pm::engine::config::INT_MAX;
+    use clap::Parser;
+    use proptest::prelude::*;
+
+    #[derive(clap::Parser, Debug)]
+    struct Args {
+        #[command(flatten)]
+        budget: BudgetArgs,
+        #[command(flatten)]
+        threads: ThreadArgs,
+    }
+
+    fn parse(flag: &str, value: &str) -> Result<Args, clap::Error> {
+        Args::try_parse_from(["t", flag, value])
+    }
+
+    /// A number as a user might type it, including the hostile spellings.
+    fn typed() -> impl Strategy<Value = String> {
+        prop_oneof![
+            any::<f64>().prop_map(|x| x.to_string()),
+            any::<i64>().prop_map(|x| x.to_string()),
+            any::<u64>().prop_map(|x| x.to_string()),
+            Just("nan".to_string()),
+            Just("inf".to_string()),
+            Just("-inf".to_string()),
+            Just("1e400".to_string()),
+            Just("".to_string()),
+            "[0-9eE.+-]{1,12}",
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        #[test]
+        fn budget_numbers_are_used_or_refused(v in typed()) {
+            for flag in ["--quality", "--n-max", "--cosn", "--seed", "--max-depth", "--split-cap", "--budget-mb"] {
+                let Ok(args) = parse(flag, &v) else { continue };
+                let b = &args.budget;
+                match b.config(Mode::Adaptive) {
+                    Err(e) => prop_assert!(!e.to_string().is_empty()),
+                    Ok(cfg) => match flag {
+                        "--quality" => {
+                            let q = b.quality.unwrap();
+                            prop_assert!((0.0..=1.0).contains(&q));
+                            prop_assert_eq!(cfg.budget.n_max().unwrap(), (q * q * INT_MAX as f64).round() as u64);
+                        }
+                        "--n-max" => prop_assert_eq!(cfg.budget, Budget::NMax(b.n_max.unwrap())),
+                        "--seed" => prop_assert_eq!(cfg.seed, b.seed),
+                        "--max-depth" => prop_assert!(cfg.max_depth == b.max_depth && b.max_depth <= 250),
+                        "--split-cap" => prop_assert!(cfg.split_cap == b.split_cap && b.split_cap >= 1),
+                        "--budget-mb" => prop_assert_eq!(
+                            cfg.memory_budget,
+                            b.budget_mb.map(|m| m * (1 << 20))
+                        ),
+                        // --cosn is checked by CosN::new when the scene is opened.
+                        _ => {
+                            let n = b.cosn.unwrap();
+                            prop_assert!(n.is_finite());
+                            let _ = CosN::new(n);
+                        }
+                    },
+                }
+            }
+        }
+
+        #[test]
+        fn exposure_is_finite_and_bounded_or_refused(v in typed()) {
+            match parse_exposure(&v) {
+                Ok(x) => prop_assert!(x.is_finite() && x.abs() <= 64.0 && x.exp2().is_finite()),
+                Err(e) => prop_assert!(e.contains(&v)),
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        #[test]
+        fn threads_are_started_as_asked_or_refused(t in prop_oneof![0usize..16, any::<usize>()]) {
+            let args = parse("--threads", &t.to_string()).unwrap();
+            match args.threads.pool() {
+                Ok(pool) if t > 0 => prop_assert_eq!(pool.current_num_threads(), t),
+                Ok(_) => {}
+                Err(e) => {
+                    prop_assert!(t > adaptive_pm::embree::max_threads());
+                    prop_assert!(e.to_string().contains("threads"));
+                }
+            }
+        }
+    }
 }

@@ -45,7 +45,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub png: Option<PathBuf>,
     /// Exposure of the PNG preview in stops.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true,
+          value_parser = super::common::parse_exposure)]
     pub exposure: f32,
     /// Direct light only: no photons are traced.
     #[arg(long, conflicts_with = "visualize_map")]

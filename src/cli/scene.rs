@@ -23,7 +23,7 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
     let scene = Scene::open(&args.scene)?;
     let (lo, hi) = scene.bounds();
     let lights: Vec<_> = scene
-        .lights
+        .lights()
         .iter()
         .map(|l| {
             let p = l.power();
@@ -33,7 +33,7 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
                 "power": [p.x, p.y, p.z],
                 "power_luminance": luminance(p),
                 "cosn": match l { Light::Area(a) => Some(a.emission.profile.exponent()), _ => None },
-                "mesh": match l { Light::Area(a) => Some(scene.meshes[a.mesh].name.clone()), _ => None },
+                "mesh": match l { Light::Area(a) => Some(scene.meshes()[a.mesh].name.clone()), _ => None },
             })
         })
         .collect();
@@ -41,36 +41,36 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
         let out = json!({
             "scene": args.scene,
             "triangles": scene.triangle_count(),
-            "meshes": scene.meshes.len(),
-            "materials": scene.materials.iter().map(|m| json!({"name": m.name, "brdf": brdf_name(&m.brdf), "emissive": m.emission.is_some()})).collect::<Vec<_>>(),
+            "meshes": scene.meshes().len(),
+            "materials": scene.materials().iter().map(|m| json!({"name": m.name, "brdf": brdf_name(&m.brdf), "emissive": m.emission.is_some()})).collect::<Vec<_>>(),
             "lights": lights,
             "bounds": {"min": [lo.x, lo.y, lo.z], "max": [hi.x, hi.y, hi.z]},
-            "camera": scene.camera.map(|c| json!({"eye": [c.eye.x, c.eye.y, c.eye.z], "forward": [c.forward.x, c.forward.y, c.forward.z], "vfov_deg": c.vfov_deg})),
-            "skipped_degenerate": scene.skipped_degenerate,
+            "camera": scene.camera().map(|c| json!({"eye": [c.eye.x, c.eye.y, c.eye.z], "forward": [c.forward.x, c.forward.y, c.forward.z], "vfov_deg": c.vfov_deg})),
+            "skipped_degenerate": scene.skipped_degenerate(),
         });
         println!("{out}");
         return Ok(());
     }
     println!("scene      {}", args.scene);
     println!("triangles  {}", scene.triangle_count());
-    if scene.skipped_degenerate > 0 {
+    if scene.skipped_degenerate() > 0 {
         println!(
             "skipped    {} zero-area triangles",
-            scene.skipped_degenerate
+            scene.skipped_degenerate()
         );
     }
-    println!("meshes     {}", scene.meshes.len());
-    for m in &scene.meshes {
+    println!("meshes     {}", scene.meshes().len());
+    for m in scene.meshes() {
         println!(
             "  {:<16} {:>6} triangles  area {:>10.1}  material {}",
             m.name,
             m.indices.len(),
             m.area(),
-            scene.materials[m.material].name
+            scene.materials()[m.material].name
         );
     }
-    println!("materials  {}", scene.materials.len());
-    for m in &scene.materials {
+    println!("materials  {}", scene.materials().len());
+    for m in scene.materials() {
         println!(
             "  {:<16} {}{}",
             m.name,
@@ -82,8 +82,8 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             }
         );
     }
-    println!("lights     {}", scene.lights.len());
-    for l in &scene.lights {
+    println!("lights     {}", scene.lights().len());
+    for l in scene.lights() {
         let p = l.power();
         let extra = match l {
             Light::Area(a) => format!(
@@ -105,7 +105,7 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
         "bounds     ({:.1}, {:.1}, {:.1}) .. ({:.1}, {:.1}, {:.1})",
         lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
     );
-    if let Some(c) = scene.camera {
+    if let Some(c) = scene.camera() {
         println!(
             "camera     eye {}  forward {}  vfov {:.4} deg",
             c.eye, c.forward, c.vfov_deg

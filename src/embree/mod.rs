@@ -26,7 +26,9 @@ use glam::Vec3;
 
 pub use device::Device;
 pub use scene::{BatchKernel, CommittedScene, SceneBuilder, DEFAULT_BATCH_KERNEL, EMBREE_LARGE};
-pub use threads::{flush_denormals_enabled, set_flush_denormals, thread_pool};
+pub use threads::{
+    flush_denormals_enabled, max_threads, set_flush_denormals, thread_pool, MAX_THREADS_PER_CORE,
+};
 pub use throughput::{measure_throughput, Throughput};
 
 /// A ray segment `origin + t * dir`, `t` in `[tnear, tfar]`. `dir` need not

@@ -47,13 +47,34 @@ pub fn flush_denormals_enabled() -> bool {
     }
 }
 
+/// Workers allowed per available core: oversubscription beyond this only
+/// costs memory and start-up time (`--threads 100000` used to start threads
+/// for minutes).
+pub const MAX_THREADS_PER_CORE: usize = 4;
+
+/// The most workers [`thread_pool`] starts: [`MAX_THREADS_PER_CORE`] times
+/// the available parallelism.
+pub fn max_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get()) * MAX_THREADS_PER_CORE
+}
+
 /// A rayon pool of `threads` workers (0: one per core) that each call
 /// [`set_flush_denormals`] when they start. Run tracing inside
 /// `pool.install(..)`.
 ///
 /// # Errors
-/// [`Error::InvalidParameter`] (`threads`) when the OS refuses to start the threads.
+/// [`Error::InvalidParameter`] (`threads`) above [`max_threads`], or when the
+/// OS refuses to start the threads.
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
+    let max = max_threads();
+    if threads > max {
+        return Err(Error::param(
+            "threads",
+            format!(
+                "{threads} is more than {MAX_THREADS_PER_CORE} per available core (at most {max})"
+            ),
+        ));
+    }
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(|i| format!("apm-trace-{i}"))

@@ -145,7 +145,11 @@ impl<'s> Tracer<'s> {
         };
         let n_max = cfg.budget.n_max()?;
         let plans = plan_emission(self.scene, cfg.mode, n_max, cache)?;
-        let emitted: u64 = plans.iter().map(|p| p.photons).sum();
+        // Checked (issue 12): two lights of ~2^63 photons each overflowed u64.
+        let emitted: u64 = plans
+            .iter()
+            .try_fold(0u64, |a, p| a.checked_add(p.photons))
+            .unwrap_or(u64::MAX);
         let budget_bytes = cfg.memory_budget.unwrap_or_else(|| available_memory() / 2);
         let max_photons = budget_bytes / BYTES_PER_PHOTON_IN_FLIGHT;
         if emitted > max_photons {
@@ -162,8 +166,7 @@ impl<'s> Tracer<'s> {
             .iter()
             .map(|m| AlbedoTable::new(&m.brdf))
             .collect();
-        let (lo, hi) = self.scene.bounds();
-        let epsilon = 1e-5 * (hi - lo).length().max(1e-3);
+        let epsilon = self.scene.ray_epsilon();
         let max_light_luminance = self
             .scene
             .lights
@@ -302,7 +305,7 @@ impl<'s> Tracer<'s> {
 
     /// Wave 0: every light's photons, photon `i` of light `l` keyed by (seed, l, i).
     fn emit(&self, cfg: &TraceConfig, plans: &[LightPlan], epsilon: f32) -> Vec<PathState> {
-        let total: u64 = plans.iter().map(|p| p.photons).sum();
+        let total: u64 = plans.iter().fold(0u64, |a, p| a.saturating_add(p.photons));
         let mut queue = Vec::with_capacity(total as usize);
         for (l, (light, plan)) in self.scene.lights.iter().zip(plans).enumerate() {
             let power = photon_power(light, plan);

@@ -48,7 +48,8 @@ fn io(path: &Path, source: std::io::Error) -> Error {
 
 fn write(dir: &Path, name: &str, text: &str) -> Result<PathBuf> {
     let p = dir.join(name);
-    std::fs::write(&p, text).map_err(|e| io(&p, e))?;
+    // Hook (issue 12): atomic, exclusive, regular-file-only write.
+    crate::output::write_bytes(&p, text.as_bytes())?;
     Ok(p)
 }
 

@@ -68,13 +68,6 @@ pub fn register_font() -> Result<()> {
     }
 }
 
-fn io(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Io {
-        path: path.to_path_buf(),
-        source: std::io::Error::other(e.to_string()),
-    }
-}
-
 const COLORS: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
@@ -208,12 +201,15 @@ fn draw<DB: DrawingBackend>(
 pub fn write_plot(stem: &Path, plot: &Plot) -> Result<()> {
     register_font()?;
     let svg = stem.with_extension("svg");
-    draw(SVGBackend::new(&svg, PLOT_SIZE).into_drawing_area(), plot).map_err(|e| io(&svg, e))?;
+    // Hook (issue 12): each figure goes to an exclusive temporary file, renamed when whole.
+    crate::output::write_via_path(&svg, |tmp| {
+        draw(SVGBackend::new(tmp, PLOT_SIZE).into_drawing_area(), plot)
+            .map_err(|e| std::io::Error::other(e.to_string()))
+    })?;
     let png = stem.with_extension("png");
-    draw(
-        BitMapBackend::new(&png, PLOT_SIZE).into_drawing_area(),
-        plot,
-    )
-    .map_err(|e| io(&png, e))?;
+    crate::output::write_via_path(&png, |tmp| {
+        draw(BitMapBackend::new(tmp, PLOT_SIZE).into_drawing_area(), plot)
+            .map_err(|e| std::io::Error::other(e.to_string()))
+    })?;
     Ok(())
 }

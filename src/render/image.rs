@@ -12,7 +12,7 @@
 use crate::engine::config::available_memory;
 use crate::error::{Error, Result};
 use glam::Vec3;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Largest width or height accepted.
 pub const MAX_DIMENSION: u32 = 16384;
@@ -98,58 +98,15 @@ fn io_err(path: &Path, source: std::io::Error) -> Error {
 /// # Errors
 /// [`Error::Io`] saying which.
 pub fn check_output_path(path: &Path) -> Result<()> {
-    let parent = parent_of(path);
-    if !parent.is_dir() {
-        return Err(io_err(
-            path,
-            std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                format!("the output folder {} does not exist", parent.display()),
-            ),
-        ));
-    }
-    if path.is_dir() {
-        return Err(io_err(
-            path,
-            std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                "the output path is a folder",
-            ),
-        ));
-    }
-    let tmp = temp_path(path);
-    std::fs::File::create(&tmp).map_err(|e| io_err(path, e))?;
-    let _ = std::fs::remove_file(&tmp);
-    Ok(())
+    // Hook (issue 12): the shared safe-output module refuses non-regular
+    // targets and probes with an exclusively created temporary file.
+    crate::output::probe(path)
 }
 
-fn parent_of(path: &Path) -> PathBuf {
-    match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    }
-}
-
-/// `.NAME.tmp-PID` beside `path`.
-fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "image".into());
-    parent_of(path).join(format!(".{name}.tmp-{}", std::process::id()))
-}
-
-/// Writes through `write` to a temporary file, then renames it to `path`; the
-/// temporary file is removed on failure.
+/// Writes through `write` to an exclusive temporary file, then renames it to
+/// `path` ([`crate::output::write_via_path`]).
 fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> std::io::Result<()>) -> Result<()> {
-    check_output_path(path)?;
-    let tmp = temp_path(path);
-    let done = write(&tmp).and_then(|()| std::fs::rename(&tmp, path));
-    if let Err(e) = done {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(io_err(path, e));
-    }
-    Ok(())
+    crate::output::write_via_path(path, write)
 }
 
 fn exr_io(e: exr::error::Error) -> std::io::Error {
@@ -236,7 +193,8 @@ impl Image {
             .flat_map(|p| [tone.apply(p.x), tone.apply(p.y), tone.apply(p.z)])
             .collect();
         write_atomic(path.as_ref(), |tmp| {
-            let file = std::io::BufWriter::new(std::fs::File::create(tmp)?);
+            // The temporary file exists (created exclusively): open it, do not create.
+            let file = std::io::BufWriter::new(std::fs::OpenOptions::new().write(true).open(tmp)?);
             let mut enc = png::Encoder::new(file, self.width, self.height);
             enc.set_color(png::ColorType::Rgb);
             enc.set_depth(png::BitDepth::Eight);

@@ -237,6 +237,5 @@ pub fn default_max_radius(scene: &Scene) -> f32 {
 
 /// Offset of secondary ray origins: a small fraction of the scene's size.
 pub(crate) fn ray_epsilon(scene: &Scene) -> f32 {
-    let (lo, hi) = scene.bounds();
-    1e-5 * (hi - lo).length().clamp(1e-3, 1e30)
+    scene.ray_epsilon()
 }

@@ -33,14 +33,23 @@ pub(super) fn load_path(path: &Path) -> Result<Scene> {
     })
 }
 
-/// Loads from bytes; `base` resolves relative buffer URIs.
+/// Loads from bytes; `base` resolves relative buffer URIs (none when `None`).
+///
+/// Order matters: the JSON is validated ([`super::validate`]) before any of
+/// the gltf crate's panicking accessors is called, buffers are loaded by
+/// [`super::buffers`] (never outside `base`), and byte ranges are checked
+/// ([`super::gltf_data`]) and the node graph bounded ([`super::gltf_graph`])
+/// before any accessor is read or any node expanded.
 pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
     let wrap = |e: gltf::Error| Error::Load {
         path: base.map(Path::to_path_buf).unwrap_or_default(),
         source: Box::new(e),
     };
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(wrap)?;
-    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(wrap)?;
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(wrap)?;
+    super::validate::check_document(gltf.document.as_json())?;
+    let buffers = super::buffers::load_buffers(gltf.document.as_json(), gltf.blob.clone(), base)?;
+    super::gltf_data::check_data(gltf.document.as_json(), &buffers)?;
+    super::gltf_graph::check_graph(gltf.document.as_json())?;
     let doc = &gltf.document;
 
     let mut scene = Scene::new();
@@ -55,69 +64,24 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
     };
     let mut stack: Vec<(gltf::Node, Mat4)> = root.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     stack.reverse();
+    // The graph is acyclic and its expansion bounded (validate::check_document).
     while let Some((node, parent)) = stack.pop() {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if !world.is_finite() {
-            return Err(Error::InvalidScene(format!(
-                "node `{}` has a non-finite transform",
-                node.name().unwrap_or("?")
-            )));
-        }
-        if let Some(mesh) = node.mesh() {
-            for (pi, prim) in mesh.primitives().enumerate() {
-                if prim.mode() != gltf::mesh::Mode::Triangles {
-                    return Err(Error::InvalidScene(format!(
-                        "mesh `{}` primitive {pi} has mode {:?}; only triangle lists are supported",
-                        mesh.name().unwrap_or("?"),
-                        prim.mode()
-                    )));
-                }
-                let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-                let Some(positions) = reader.read_positions() else {
-                    return Err(Error::InvalidScene(format!(
-                        "mesh `{}` primitive {pi} has no POSITION attribute",
-                        mesh.name().unwrap_or("?")
-                    )));
-                };
-                let positions: Vec<Vec3> = positions
-                    .map(|p| world.transform_point3(Vec3::from(p)))
-                    .collect();
-                let flat: Vec<u32> = match reader.read_indices() {
-                    Some(i) => i.into_u32().collect(),
-                    None => (0..positions.len() as u32).collect(),
-                };
-                let indices = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-                let material = match prim.material().index() {
-                    Some(i) => material_ids[i],
-                    None => *default_material.get_or_insert_with(|| {
-                        scene.add_material(Material {
-                            name: "default".into(),
-                            brdf: Brdf::Lambert(Lambert {
-                                albedo: Vec3::splat(0.8),
-                            }),
-                            emission: None,
-                        })
-                    }),
-                };
-                let name = format!("{}#{pi}", mesh.name().unwrap_or("mesh"));
-                scene.add_mesh(name, positions, indices, material)?;
-            }
-        }
-        if let Some(light) = node.light() {
-            scene.add_light(convert_light(&light, &world)?);
-        }
-        if let Some(cam) = node.camera() {
-            if let (gltf::camera::Projection::Perspective(p), None) =
-                (cam.projection(), scene.camera)
-            {
-                scene.camera = Some(Camera {
-                    eye: world.transform_point3(Vec3::ZERO),
-                    forward: world.transform_vector3(-Vec3::Z).normalize(),
-                    up: world.transform_vector3(Vec3::Y).normalize(),
-                    vfov_deg: p.yfov().to_degrees(),
-                });
-            }
-        }
+        load_node(
+            &mut scene,
+            &node,
+            &world,
+            &buffers,
+            &material_ids,
+            &mut default_material,
+        )
+        .map_err(|e| match e {
+            Error::InvalidScene(m) => Error::InvalidScene(format!(
+                "{}: {m}",
+                super::validate::label("node", node.index(), node.name())
+            )),
+            other => other,
+        })?;
         let first_child = stack.len();
         stack.extend(node.children().map(|c| (c, world)));
         stack[first_child..].reverse();
@@ -125,6 +89,78 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
     // Nodes are visited depth-first in file order, so mesh (and Embree geometry) ids follow the file.
     scene.validate()?;
     Ok(scene)
+}
+
+/// One node's meshes, light and camera, in world space `world`.
+fn load_node(
+    scene: &mut Scene,
+    node: &gltf::Node,
+    world: &Mat4,
+    buffers: &[Vec<u8>],
+    material_ids: &[usize],
+    default_material: &mut Option<usize>,
+) -> Result<()> {
+    if !world.is_finite() {
+        return Err(Error::InvalidScene(
+            "its world transform is not finite".into(),
+        ));
+    }
+    if let Some(mesh) = node.mesh() {
+        let mesh_label = super::validate::label("mesh", mesh.index(), mesh.name());
+        for (pi, prim) in mesh.primitives().enumerate() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                return Err(Error::InvalidScene(format!(
+                    "{mesh_label} primitive {pi} has mode {:?}; only triangle lists are supported",
+                    prim.mode()
+                )));
+            }
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
+            let Some(positions) = reader.read_positions() else {
+                return Err(Error::InvalidScene(format!(
+                    "{mesh_label} primitive {pi} has no POSITION attribute"
+                )));
+            };
+            let positions: Vec<Vec3> = positions
+                .map(|p| world.transform_point3(Vec3::from(p)))
+                .collect();
+            let flat: Vec<u32> = match reader.read_indices() {
+                Some(i) => i.into_u32().collect(),
+                None => (0..positions.len() as u32).collect(),
+            };
+            let indices = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            let material = match prim.material().index() {
+                Some(i) => material_ids[i],
+                None => *default_material.get_or_insert_with(|| {
+                    scene.add_material(Material {
+                        name: "default".into(),
+                        brdf: Brdf::Lambert(Lambert {
+                            albedo: Vec3::splat(0.8),
+                        }),
+                        emission: None,
+                    })
+                }),
+            };
+            let name = format!("{}#{pi}", mesh.name().unwrap_or("mesh"));
+            scene.add_mesh(name, positions, indices, material)?;
+        }
+    }
+    if let Some(light) = node.light() {
+        scene.add_light(convert_light(&light, world)?)?;
+    }
+    if let Some(cam) = node.camera() {
+        if let (gltf::camera::Projection::Perspective(p), None) = (cam.projection(), scene.camera) {
+            // A sheared or scaled node: keep up orthogonal to forward.
+            let forward = world.transform_vector3(-Vec3::Z).normalize();
+            let up = world.transform_vector3(Vec3::Y);
+            scene.set_camera(Camera {
+                eye: world.transform_point3(Vec3::ZERO),
+                forward,
+                up: (up - forward * up.dot(forward)).normalize(),
+                vfov_deg: p.yfov().to_degrees(),
+            })?;
+        }
+    }
+    Ok(())
 }
 
 fn convert_material(m: &gltf::Material) -> Result<Material> {
@@ -195,8 +231,8 @@ fn convert_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Resu
             inner_cone_angle,
             outer_cone_angle,
         } => {
-            let outer = outer_cone_angle.clamp(1e-4, std::f32::consts::FRAC_PI_2);
-            let inner = inner_cone_angle.clamp(0.0, outer);
+            // Ranges were checked by validate::check_light: no silent clamp.
+            let (inner, outer) = (inner_cone_angle, outer_cone_angle);
             Ok(Light::Spot(SpotLight {
                 position,
                 direction: world.transform_vector3(-Vec3::Z).normalize(),

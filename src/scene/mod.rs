@@ -6,10 +6,18 @@
 //! Only what the scene uses is modelled: the directionality analysis later runs on
 //! the emitters and materials found here, nothing else.
 
+mod buffers;
+mod checks;
 mod cornell;
+mod gltf_data;
+mod gltf_graph;
 mod gltf_load;
 mod light;
 mod surface;
+pub mod validate;
+
+pub use buffers::{percent_decode, resolve_inside, MAX_BUFFER_BYTES};
+pub use checks::MAX_COORDINATE;
 
 pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
 pub use surface::{SurfacePoint, SurfaceSampler};
@@ -103,18 +111,27 @@ impl Camera {
 }
 
 /// A scene ready to be traced.
+///
+/// Its fields are private to the crate: a `Scene` is only built through
+/// [`Scene::add_material`], [`Scene::add_mesh`], [`Scene::add_light`] and
+/// [`Scene::set_camera`], which refuse what would later panic or abort
+/// (bad indices, non-finite or huge coordinates, overflowing powers), so every
+/// `Scene` a caller holds can be committed and traced.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
     /// Materials; meshes refer to them by index.
-    pub materials: Vec<Material>,
+    pub(crate) materials: Vec<Material>,
     /// Triangle meshes.
-    pub meshes: Vec<Mesh>,
+    pub(crate) meshes: Vec<Mesh>,
     /// Lights: one per emissive mesh, plus punctual lights.
-    pub lights: Vec<Light>,
+    pub(crate) lights: Vec<Light>,
     /// The camera, when the file has one.
-    pub camera: Option<Camera>,
+    pub(crate) camera: Option<Camera>,
     /// Zero-area triangles dropped while loading.
-    pub skipped_degenerate: usize,
+    pub(crate) skipped_degenerate: usize,
+    /// Per mesh, the caller's index of each kept triangle, when some were
+    /// dropped (`None`: the identity). Maps `Hit::prim_id` back.
+    pub(crate) source_triangles: Vec<Option<Vec<u32>>>,
 }
 
 /// Area of a triangle.
@@ -166,11 +183,14 @@ impl Scene {
     }
 
     /// Adds a mesh; an emissive material makes it an area light.
-    /// Zero-area triangles are dropped and counted in [`Scene::skipped_degenerate`].
+    /// Zero-area triangles are dropped and counted in [`Scene::skipped_degenerate`];
+    /// [`Scene::source_triangle`] maps a kept triangle back to `indices`.
     ///
     /// # Errors
-    /// [`Error::InvalidScene`] for a non-finite position, an index out of range
-    /// or an unknown material.
+    /// [`Error::InvalidScene`] naming the mesh for a position that is not
+    /// finite or beyond [`MAX_COORDINATE`], an index out of range, an unknown
+    /// material or one with a bad emission, only degenerate triangles, or an
+    /// emitted power that overflows.
     pub fn add_mesh(
         &mut self,
         name: impl Into<String>,
@@ -184,27 +204,30 @@ impl Scene {
                 "mesh `{name}` refers to material {material}, which does not exist"
             )));
         };
-        if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
-            return Err(Error::InvalidScene(format!(
-                "mesh `{name}` has a non-finite vertex position {p}"
-            )));
-        }
+        checks::check_material(mat)?;
+        checks::check_positions(&name, &positions)?;
         let n = positions.len() as u64;
-        if let Some(t) = indices.iter().find(|t| t.iter().any(|&i| i as u64 >= n)) {
+        if let Some(t) = indices
+            .iter()
+            .position(|t| t.iter().any(|&i| i as u64 >= n))
+        {
+            // The index values are not shown: they may be bytes of any file.
             return Err(Error::InvalidScene(format!(
-                "mesh `{name}` has a triangle {t:?} indexing past its {n} vertices"
+                "mesh `{name}` has triangle {t} indexing past its {n} vertices"
             )));
         }
-        let before = indices.len();
-        let indices: Vec<[u32; 3]> = indices
-            .into_iter()
-            .filter(|&[a, b, c]| {
-                let tri = [a, b, c].map(|i| positions[i as usize]);
-                let c = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-                c.length_squared() > 0.0 && c.is_finite()
-            })
-            .collect();
-        self.skipped_degenerate += before - indices.len();
+        let (indices, source) = checks::drop_degenerate(&positions, indices);
+        let dropped = source.as_ref().map_or(0, |s| s.len_dropped);
+        if indices.is_empty() && dropped > 0 {
+            return Err(Error::InvalidScene(format!(
+                "mesh `{name}` has only degenerate (zero-area) triangles ({dropped})"
+            )));
+        }
+        if indices.is_empty() {
+            return Err(Error::InvalidScene(format!(
+                "mesh `{name}` has no triangle"
+            )));
+        }
         let emission = mat.emission;
         let mesh = Mesh {
             name,
@@ -212,19 +235,100 @@ impl Scene {
             indices,
             material,
         };
+        let light = match emission {
+            Some(e) => Some(checks::area_light(&mesh, self.meshes.len(), e)?),
+            None => None,
+        };
+        self.skipped_degenerate += dropped;
+        self.source_triangles.push(source.map(|s| s.kept));
         self.meshes.push(mesh);
-        let index = self.meshes.len() - 1;
-        if let Some(e) = emission {
-            if let Some(light) = AreaLight::new(&self.meshes[index], index, e) {
-                self.lights.push(Light::Area(light));
-            }
+        if let Some(light) = light {
+            self.lights.push(Light::Area(light));
         }
-        Ok(index)
+        Ok(self.meshes.len() - 1)
     }
 
-    /// Adds a punctual light.
-    pub fn add_light(&mut self, light: Light) {
+    /// Adds a punctual light and returns its index in [`Scene::lights`].
+    ///
+    /// # Errors
+    /// [`Error::InvalidScene`] for a position that is not finite or beyond
+    /// [`MAX_COORDINATE`], a spot axis that is not a unit vector, cone cosines
+    /// out of order, a negative or non-finite intensity, or a power that
+    /// overflows. Area lights come from [`Scene::add_mesh`] only.
+    pub fn add_light(&mut self, light: Light) -> Result<usize> {
+        checks::check_punctual(&light)?;
         self.lights.push(light);
+        Ok(self.lights.len() - 1)
+    }
+
+    /// Sets the camera.
+    ///
+    /// # Errors
+    /// [`Error::InvalidScene`] for an eye that is not finite or beyond
+    /// [`MAX_COORDINATE`], axes that are not orthogonal unit vectors, or a
+    /// vertical field of view outside (0, 180) degrees.
+    pub fn set_camera(&mut self, camera: Camera) -> Result<()> {
+        checks::check_camera(&camera)?;
+        self.camera = Some(camera);
+        Ok(())
+    }
+
+    /// Removes every light: emissive meshes stay but no longer emit photons,
+    /// and [`Scene::validate`] refuses a scene left without light.
+    pub fn clear_lights(&mut self) {
+        self.lights.clear();
+    }
+
+    /// Materials; meshes refer to them by index.
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// Triangle meshes, in the order they were added (the Embree geometry id).
+    pub fn meshes(&self) -> &[Mesh] {
+        &self.meshes
+    }
+
+    /// Lights: one per emissive mesh, plus punctual lights.
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// The camera, when the scene has one.
+    pub fn camera(&self) -> Option<Camera> {
+        self.camera
+    }
+
+    /// Zero-area triangles dropped by [`Scene::add_mesh`].
+    pub fn skipped_degenerate(&self) -> usize {
+        self.skipped_degenerate
+    }
+
+    /// The index, in the `indices` given to [`Scene::add_mesh`], of triangle
+    /// `prim_id` of mesh `mesh` (a hit's `geom_id` and `prim_id`): they differ
+    /// once degenerate triangles were dropped. `None` when out of range.
+    pub fn source_triangle(&self, mesh: u32, prim_id: u32) -> Option<usize> {
+        let m = self.meshes.get(mesh as usize)?;
+        if prim_id as usize >= m.indices.len() {
+            return None;
+        }
+        match self.source_triangles.get(mesh as usize)? {
+            Some(map) => map.get(prim_id as usize).map(|&i| i as usize),
+            None => Some(prim_id as usize),
+        }
+    }
+
+    /// The offset that keeps a ray leaving a surface off it: `1e-5` of the
+    /// scene's bounding-box diagonal, at least `1e-8`. One value for the
+    /// tracer, the renderer and the benchmarks.
+    pub fn ray_epsilon(&self) -> f32 {
+        let (lo, hi) = self.bounds();
+        let d = (hi - lo).length();
+        if d.is_finite() {
+            1e-5 * d.max(1e-3)
+        } else {
+            1e-8
+        }
     }
 
     /// Sets every area light's `cos^n` exponent (the `--cosn` override).

@@ -92,10 +92,9 @@ pub fn run(args: CornellArgs) -> anyhow::Result<()> {
     // Fail before the sweep, not after minutes of tracing.
     std::fs::create_dir_all(&out_dir)
         .with_context(|| format!("cannot create the output folder {}", out_dir.display()))?;
-    let probe = out_dir.join(".write-test");
-    std::fs::write(&probe, b"")
+    // Hook (issue 12): an exclusive probe, no planted symlink followed.
+    adaptive_pm::output::probe(out_dir.join(".write-test"))
         .with_context(|| format!("the output folder {} is not writable", out_dir.display()))?;
-    let _ = std::fs::remove_file(&probe);
 
     let pool = args.threads.pool()?;
     let bar = sweep_bar(!args.json, cfg.run_count());

@@ -39,8 +39,7 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
     let scene = Scene::open(&args.scene)?;
     let device = Device::new()?;
     let rt = scene.commit(&device)?;
-    let (lo, hi) = scene.bounds();
-    let eps = 1e-5 * (hi - lo).length();
+    let eps = scene.ray_epsilon();
     let rays = scene
         .surface_sampler()
         .incoherent_rays(args.rays, args.seed, eps);

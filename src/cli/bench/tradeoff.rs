@@ -226,8 +226,7 @@ fn reference(
         "floor": floor,
         "seconds": t.elapsed().as_secs_f64(),
     });
-    std::fs::write(&meta, serde_json::to_string_pretty(&doc)?)
-        .with_context(|| meta.display().to_string())?;
+    adaptive_pm::output::write_bytes(&meta, serde_json::to_string_pretty(&doc)?.as_bytes())?;
     Ok(Reference {
         image,
         floor,
@@ -308,7 +307,7 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
             let q = p.position;
             floor_csv += &format!("{},{},{},{r:.6e},{d:.6e}\n", q.x, q.y, q.z);
         }
-        std::fs::write(args.out.join("floor.csv"), floor_csv)?;
+        adaptive_pm::output::write_bytes(args.out.join("floor.csv"), floor_csv.as_bytes())?;
         let mut rows = Vec::new();
         say!(
             args.json,
@@ -420,9 +419,8 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
 }
 
 fn write_csv(path: &Path, scene: &str, rows: &[Row]) -> anyhow::Result<()> {
-    let mut f = std::io::BufWriter::new(
-        std::fs::File::create(path).with_context(|| path.display().to_string())?,
-    );
+    // Hook (issue 12): built in memory, written atomically by adaptive_pm::output.
+    let mut f = Vec::new();
     writeln!(f, "scene,mode,n_max,k,photons,trace_s,build_s,render_s,total_s,rmse,rel_rmse,map_rel_rmse,floor_rel_rmse,floor_direct_rel_rmse")?;
     for r in rows {
         writeln!(
@@ -443,7 +441,7 @@ fn write_csv(path: &Path, scene: &str, rows: &[Row]) -> anyhow::Result<()> {
             r.floor_direct_rel_rmse
         )?;
     }
-    Ok(())
+    Ok(adaptive_pm::output::write_bytes(path, &f)?)
 }
 
 /// `(time, rel_rmse)` of one mode, by time.
@@ -520,7 +518,14 @@ fn summary(rows: &[Row], modes: &[Mode], json: bool) -> Vec<String> {
     lines
 }
 
+/// Hook (issue 12): the figure goes to an exclusive temporary file, renamed when whole.
 fn plot(path: &Path, scene: &str, rows: &[Row], reference_noise: f64) -> anyhow::Result<()> {
+    Ok(adaptive_pm::output::write_via_path(path, |tmp| {
+        plot_to(tmp, scene, rows, reference_noise).map_err(|e| std::io::Error::other(e.to_string()))
+    })?)
+}
+
+fn plot_to(path: &Path, scene: &str, rows: &[Row], reference_noise: f64) -> anyhow::Result<()> {
     adaptive_pm::experiments::plot::register_font()?;
     let pts: Vec<(f64, f64)> = rows
         .iter()

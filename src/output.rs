@@ -1,0 +1,167 @@
+//! Safe output files: every file a command writes appears whole or not at all,
+//! and never replaces something that is not a regular file.
+//!
+//! - The target must be absent or a regular file (also through a symbolic
+//!   link): a character device (`--out /dev/null`), a FIFO, a socket or a
+//!   folder is refused, so running as root cannot destroy `/dev/null`.
+//! - The bytes go to a temporary file in the target's folder, created with
+//!   `create_new` (`O_CREAT | O_EXCL`: never opens an existing file, never
+//!   follows a planted symbolic link), flushed with `fsync`, then renamed over
+//!   the target (atomic within a file system). On any failure the temporary
+//!   file is removed and the target is left as it was.
+//!
+//! Every writer of the crate and of the CLI goes through [`write_bytes`],
+//! [`write_with`] or [`write_via_path`].
+
+use crate::error::{Error, Result};
+use std::fs::{File, OpenOptions};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+fn io_err(path: &Path, source: std::io::Error) -> Error {
+    Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+fn invalid(path: &Path, msg: &str) -> Error {
+    io_err(
+        path,
+        std::io::Error::new(std::io::ErrorKind::InvalidInput, msg.to_string()),
+    )
+}
+
+fn parent_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Checks that `path` may receive an output file: its folder exists, and it
+/// is absent or a regular file (symbolic links are followed for this check).
+///
+/// # Errors
+/// [`Error::Io`] naming the path and why.
+pub fn check_target(path: &Path) -> Result<()> {
+    if path.file_name().is_none() {
+        return Err(invalid(path, "the output path names no file"));
+    }
+    let parent = parent_of(path);
+    if !parent.is_dir() {
+        return Err(invalid(path, "the output folder does not exist"));
+    }
+    match std::fs::metadata(path) {
+        Ok(m) if m.file_type().is_file() => Ok(()),
+        Ok(m) if m.is_dir() => Err(invalid(path, "the output path is a folder")),
+        Ok(_) => Err(invalid(
+            path,
+            "the output path exists and is not a regular file (a device, FIFO or socket)",
+        )),
+        // A dangling symbolic link: rename replaces the link itself.
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(io_err(path, e)),
+    }
+}
+
+/// Creates a fresh temporary file beside `path` (exclusively).
+fn create_temp(path: &Path) -> Result<(PathBuf, File)> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let parent = parent_of(path);
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    for _ in 0..64 {
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let tmp = parent.join(format!(".{name}.tmp-{}-{n}-{nanos:x}", std::process::id()));
+        match OpenOptions::new().write(true).create_new(true).open(&tmp) {
+            Ok(f) => return Ok((tmp, f)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(io_err(path, e)),
+        }
+    }
+    Err(invalid(path, "cannot create a temporary file beside it"))
+}
+
+/// Syncs and renames `tmp` over `path`, or removes it on failure.
+fn finish(path: &Path, tmp: &Path, written: std::io::Result<()>) -> Result<()> {
+    let done = written
+        .and_then(|()| File::open(tmp)?.sync_all())
+        .and_then(|()| {
+            // The target may have been replaced meanwhile: check again.
+            check_target(path).map_err(|e| std::io::Error::other(e.to_string()))?;
+            std::fs::rename(tmp, path)
+        });
+    if let Err(e) = done {
+        let _ = std::fs::remove_file(tmp);
+        return Err(io_err(path, e));
+    }
+    // Best effort: make the rename itself durable.
+    if let Ok(dir) = File::open(parent_of(path)) {
+        let _ = dir.sync_all();
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to `path` atomically.
+///
+/// # Errors
+/// [`Error::Io`] for a refused target or a failed write; `path` is untouched then.
+pub fn write_bytes(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
+    write_with(path, |w| w.write_all(bytes))
+}
+
+/// Writes to `path` atomically through `write`, given a buffered writer.
+///
+/// # Errors
+/// As [`write_bytes`], and whatever `write` returns.
+pub fn write_with(
+    path: impl AsRef<Path>,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<()> {
+    let path = path.as_ref();
+    check_target(path)?;
+    let (tmp, file) = create_temp(path)?;
+    let mut w = BufWriter::new(file);
+    let written = write(&mut w).and_then(|()| w.flush());
+    drop(w);
+    finish(path, &tmp, written)
+}
+
+/// Writes to `path` atomically through `write`, given the path of the
+/// (already created, empty) temporary file: for encoders that open a path
+/// themselves (EXR, plotters).
+///
+/// # Errors
+/// As [`write_bytes`], and whatever `write` returns.
+pub fn write_via_path(
+    path: impl AsRef<Path>,
+    write: impl FnOnce(&Path) -> std::io::Result<()>,
+) -> Result<()> {
+    let path = path.as_ref();
+    check_target(path)?;
+    let (tmp, file) = create_temp(path)?;
+    drop(file);
+    let written = write(&tmp);
+    finish(path, &tmp, written)
+}
+
+/// Checks, before a long run, that `path` will be writable: [`check_target`],
+/// then a temporary file is created beside it (exclusively) and removed.
+///
+/// # Errors
+/// As [`check_target`], or when the folder is not writable.
+pub fn probe(path: impl AsRef<Path>) -> Result<()> {
+    let path = path.as_ref();
+    check_target(path)?;
+    let (tmp, file) = create_temp(path)?;
+    drop(file);
+    let _ = std::fs::remove_file(tmp);
+    Ok(())
+}

@@ -1,0 +1,97 @@
+//! The glTF node graph: acyclic, and bounded once expanded.
+//!
+//! A node listed as the child of several parents is instantiated once per
+//! path, so 40 levels of shared children expand to 2^40 nodes. The loader
+//! walks every path, so the instances are counted first, bottom-up with
+//! saturating sums (one pass over the nodes, no expansion), and a graph
+//! over [`MAX_NODE_INSTANCES`] nodes or [`MAX_INSTANCED_TRIANGLES`]
+//! triangles is refused before any vertex is transformed.
+
+use super::validate::{label, MAX_INSTANCED_TRIANGLES, MAX_NODE_INSTANCES};
+use crate::error::{Error, Result};
+use gltf::json::{mesh::Semantic, validation::Checked, Root};
+
+/// Triangles one instance of mesh `m` adds (from the accessors' counts).
+fn mesh_triangles(root: &Root, m: usize) -> u64 {
+    root.meshes[m]
+        .primitives
+        .iter()
+        .map(|p| {
+            let count = match p.indices {
+                Some(i) => root.accessors[i.value()].count.0,
+                None => p
+                    .attributes
+                    .get(&Checked::Valid(Semantic::Positions))
+                    .map_or(0, |a| root.accessors[a.value()].count.0),
+            };
+            count / 3
+        })
+        .fold(0u64, u64::saturating_add)
+}
+
+/// Refuses cycles and explosive sharing. Node, mesh and child indices were
+/// checked by [`super::validate::check_document`] before this runs.
+pub(super) fn check_graph(root: &Root) -> Result<()> {
+    let n = root.nodes.len();
+    // Per node: (instances, triangles) of its subtree, once finished.
+    let mut done: Vec<Option<(u64, u64)>> = vec![None; n];
+    let mut on_path = vec![false; n];
+    for start in 0..n {
+        if done[start].is_some() {
+            continue;
+        }
+        // Iterative post-order DFS: a 100 000-deep chain must not overflow the stack.
+        let mut stack: Vec<(usize, usize)> = vec![(start, 0)];
+        on_path[start] = true;
+        while let Some(&mut (node, ref mut next)) = stack.last_mut() {
+            let children = root.nodes[node].children.as_deref().unwrap_or(&[]);
+            if let Some(c) = children.get(*next) {
+                *next += 1;
+                let c = c.value();
+                if on_path[c] {
+                    return Err(Error::InvalidScene(format!(
+                        "{} is its own ancestor (the node hierarchy has a cycle)",
+                        label("node", c, root.nodes[c].name.as_deref())
+                    )));
+                }
+                if done[c].is_none() {
+                    on_path[c] = true;
+                    stack.push((c, 0));
+                }
+                continue;
+            }
+            let mut nodes = 1u64;
+            let mut tris = root.nodes[node]
+                .mesh
+                .map_or(0, |m| mesh_triangles(root, m.value()));
+            for c in children {
+                let (cn, ct) = done[c.value()].unwrap_or_default();
+                nodes = nodes.saturating_add(cn);
+                tris = tris.saturating_add(ct);
+            }
+            done[node] = Some((nodes, tris));
+            on_path[node] = false;
+            stack.pop();
+        }
+    }
+    for (si, s) in root.scenes.iter().enumerate() {
+        let (mut nodes, mut tris) = (0u64, 0u64);
+        for r in &s.nodes {
+            let (cn, ct) = done[r.value()].unwrap_or_default();
+            nodes = nodes.saturating_add(cn);
+            tris = tris.saturating_add(ct);
+        }
+        let name = label("scene", si, s.name.as_deref());
+        if nodes > MAX_NODE_INSTANCES {
+            return Err(Error::InvalidScene(format!(
+                "{name} expands to {nodes} node instances (shared children), over the limit of {MAX_NODE_INSTANCES}"
+            )));
+        }
+        if tris > MAX_INSTANCED_TRIANGLES {
+            return Err(Error::InvalidScene(format!(
+                "{name} expands to {tris} triangles, over the limit of {MAX_INSTANCED_TRIANGLES}"
+            )));
+        }
+    }
+    Ok(())
+}

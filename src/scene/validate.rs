@@ -1,0 +1,288 @@
+//! Validation of a glTF document before anything trusts it.
+//!
+//! The gltf crate's accessors (`Node::mesh`, `Camera::projection`,
+//! `Light::kind`, the accessor readers, ...) index and `unwrap` without
+//! checking; a hostile file makes them panic, loop or allocate without bound.
+//! [`check_document`] runs on the parsed JSON before any of them is called and
+//! checks every reference, enum and number the loader uses; [`super::gltf_data`]
+//! then checks every byte range against the loaded buffers, and
+//! [`super::gltf_graph`] the node graph. Each problem is one
+//! [`Error::InvalidScene`] naming the node, mesh, accessor, camera or light.
+//!
+
+use crate::error::{Error, Result};
+use gltf::json::accessor::{ComponentType, Type};
+use gltf::json::validation::Checked;
+use gltf::json::{self, Root};
+
+/// Node instances a scene may expand to (nodes reached through every path).
+pub const MAX_NODE_INSTANCES: u64 = 1 << 20;
+/// Triangles a scene may expand to once every mesh instance is placed
+/// (about 48 bytes each while loading: 16 M triangles stay under 1 GB).
+pub const MAX_INSTANCED_TRIANGLES: u64 = 1 << 24;
+/// Elements of an accessor that no buffer bytes back (a sparse accessor
+/// without a `bufferView` starts as `count` zeros).
+pub const MAX_UNBACKED_ELEMENTS: u64 = 1 << 22;
+
+fn bad(msg: String) -> Error {
+    Error::InvalidScene(msg)
+}
+
+/// `kind i (`name`)`, the way every message names an object.
+pub(super) fn label(kind: &str, i: usize, name: Option<&str>) -> String {
+    match name {
+        Some(n) => format!("{kind} {i} (`{n}`)"),
+        None => format!("{kind} {i}"),
+    }
+}
+
+fn index_ok<T>(what: &str, idx: json::Index<T>, len: usize) -> Result<usize> {
+    let i = idx.value();
+    if i < len {
+        Ok(i)
+    } else {
+        Err(bad(format!(
+            "{what} refers to index {i}, but there are only {len}"
+        )))
+    }
+}
+
+/// Bytes of one component.
+pub(super) fn component_size(c: ComponentType) -> u64 {
+    match c {
+        ComponentType::I8 | ComponentType::U8 => 1,
+        ComponentType::I16 | ComponentType::U16 => 2,
+        ComponentType::U32 | ComponentType::F32 => 4,
+    }
+}
+
+/// Components of one element.
+pub(super) fn multiplicity(t: Type) -> u64 {
+    match t {
+        Type::Scalar => 1,
+        Type::Vec2 => 2,
+        Type::Vec3 => 3,
+        Type::Vec4 | Type::Mat2 => 4,
+        Type::Mat3 => 9,
+        Type::Mat4 => 16,
+    }
+}
+
+/// Checks the document's structure; no buffer data is needed.
+pub(super) fn check_document(root: &Root) -> Result<()> {
+    for (i, a) in root.accessors.iter().enumerate() {
+        let name = label("accessor", i, a.name.as_deref());
+        if !matches!(a.component_type, Checked::Valid(_)) || !matches!(a.type_, Checked::Valid(_)) {
+            return Err(bad(format!("{name} has an unknown componentType or type")));
+        }
+        if let Some(v) = a.buffer_view {
+            index_ok(&name, v, root.buffer_views.len())?;
+        } else if a.count.0 > MAX_UNBACKED_ELEMENTS {
+            return Err(bad(format!(
+                "{name} has count {} without a bufferView (at most {MAX_UNBACKED_ELEMENTS})",
+                a.count.0
+            )));
+        }
+        if let Some(s) = &a.sparse {
+            index_ok(
+                &format!("{name} sparse indices"),
+                s.indices.buffer_view,
+                root.buffer_views.len(),
+            )?;
+            index_ok(
+                &format!("{name} sparse values"),
+                s.values.buffer_view,
+                root.buffer_views.len(),
+            )?;
+            if !matches!(s.indices.component_type, Checked::Valid(_)) {
+                return Err(bad(format!("{name} has sparse indices of an unknown type")));
+            }
+            if s.count.0 == 0 || s.count.0 > a.count.0 {
+                return Err(bad(format!(
+                    "{name} has a sparse count {} outside 1..={}",
+                    s.count.0, a.count.0
+                )));
+            }
+        }
+    }
+    for (i, v) in root.buffer_views.iter().enumerate() {
+        let name = label("bufferView", i, v.name.as_deref());
+        index_ok(&name, v.buffer, root.buffers.len())?;
+        if let Some(s) = v.byte_stride {
+            if !(4..=252).contains(&s.0) || s.0 % 4 != 0 {
+                return Err(bad(format!(
+                    "{name} has byteStride {}, not a multiple of 4 in 4..=252",
+                    s.0
+                )));
+            }
+        }
+    }
+    for (i, m) in root.meshes.iter().enumerate() {
+        check_mesh(root, i, m)?;
+    }
+    for (i, c) in root.cameras.iter().enumerate() {
+        check_camera(i, c)?;
+    }
+    let lights = root
+        .extensions
+        .as_ref()
+        .and_then(|e| e.khr_lights_punctual.as_ref())
+        .map_or(&[][..], |l| &l.lights[..]);
+    for (i, l) in lights.iter().enumerate() {
+        check_light(i, l)?;
+    }
+    for (i, n) in root.nodes.iter().enumerate() {
+        check_node(root, i, n, lights.len())?;
+    }
+    if let Some(s) = root.scene {
+        index_ok("the default scene", s, root.scenes.len())?;
+    }
+    for (i, s) in root.scenes.iter().enumerate() {
+        for &n in &s.nodes {
+            index_ok(&label("scene", i, s.name.as_deref()), n, root.nodes.len())?;
+        }
+    }
+    Ok(())
+}
+
+fn check_mesh(root: &Root, i: usize, m: &json::Mesh) -> Result<()> {
+    let name = label("mesh", i, m.name.as_deref());
+    for (pi, p) in m.primitives.iter().enumerate() {
+        let here = format!("{name} primitive {pi}");
+        if !matches!(p.mode, Checked::Valid(_)) {
+            return Err(bad(format!("{here} has an unknown mode")));
+        }
+        if let Some(mat) = p.material {
+            index_ok(&here, mat, root.materials.len())?;
+        }
+        for (sem, &a) in &p.attributes {
+            let Checked::Valid(sem) = sem else {
+                return Err(bad(format!("{here} has an attribute of unknown semantic")));
+            };
+            let ai = index_ok(
+                &format!("{here} attribute {sem:?}"),
+                a,
+                root.accessors.len(),
+            )?;
+            if *sem == json::mesh::Semantic::Positions {
+                let acc = &root.accessors[ai];
+                let ok = matches!(
+                    acc.component_type,
+                    Checked::Valid(json::accessor::GenericComponentType(ComponentType::F32))
+                ) && acc.type_ == Checked::Valid(Type::Vec3);
+                if !ok {
+                    return Err(bad(format!(
+                        "{here}: its POSITION {} is not a float VEC3",
+                        label("accessor", ai, acc.name.as_deref())
+                    )));
+                }
+                if acc.buffer_view.is_none() && acc.sparse.is_none() {
+                    return Err(bad(format!(
+                        "{here}: its POSITION {} has neither a bufferView nor sparse data",
+                        label("accessor", ai, acc.name.as_deref())
+                    )));
+                }
+            }
+        }
+        if let Some(ix) = p.indices {
+            let ai = index_ok(&format!("{here} indices"), ix, root.accessors.len())?;
+            let acc = &root.accessors[ai];
+            let int = matches!(
+                acc.component_type,
+                Checked::Valid(json::accessor::GenericComponentType(
+                    ComponentType::U8 | ComponentType::U16 | ComponentType::U32
+                ))
+            );
+            if !int || acc.type_ != Checked::Valid(Type::Scalar) {
+                return Err(bad(format!(
+                    "{here}: its index {} is not an unsigned integer SCALAR",
+                    label("accessor", ai, acc.name.as_deref())
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_camera(i: usize, c: &json::Camera) -> Result<()> {
+    use json::camera::Type as T;
+    let name = label("camera", i, c.name.as_deref());
+    match c.type_ {
+        Checked::Valid(T::Perspective) => {
+            let Some(p) = &c.perspective else {
+                return Err(bad(format!(
+                    "{name} is perspective but has no `perspective` object"
+                )));
+            };
+            if !(p.yfov.is_finite() && p.yfov > 0.0 && p.yfov < std::f32::consts::PI) {
+                return Err(bad(format!("{name} has yfov {}, outside (0, pi)", p.yfov)));
+            }
+            Ok(())
+        }
+        Checked::Valid(T::Orthographic) if c.orthographic.is_none() => Err(bad(format!(
+            "{name} is orthographic but has no `orthographic` object"
+        ))),
+        Checked::Valid(T::Orthographic) => Ok(()),
+        Checked::Invalid => Err(bad(format!("{name} has an unknown type"))),
+    }
+}
+
+fn check_light(i: usize, l: &json::extensions::scene::khr_lights_punctual::Light) -> Result<()> {
+    use json::extensions::scene::khr_lights_punctual::Type as T;
+    let name = label("light", i, l.name.as_deref());
+    if !l.intensity.is_finite() || l.color.iter().any(|c| !c.is_finite()) {
+        return Err(bad(format!("{name} has a non-finite color or intensity")));
+    }
+    match l.type_ {
+        Checked::Invalid => Err(bad(format!("{name} has an unknown type"))),
+        Checked::Valid(T::Spot) => {
+            let Some(s) = &l.spot else {
+                return Err(bad(format!(
+                    "{name} is a spot light without a `spot` object"
+                )));
+            };
+            let (inner, outer) = (s.inner_cone_angle, s.outer_cone_angle);
+            let half = std::f32::consts::FRAC_PI_2;
+            if !(outer.is_finite() && outer > 0.0 && outer <= half) {
+                return Err(bad(format!(
+                    "{name} has outerConeAngle {outer}, outside (0, pi/2]"
+                )));
+            }
+            if !(inner.is_finite() && (0.0..outer).contains(&inner)) {
+                return Err(bad(format!(
+                    "{name} has innerConeAngle {inner}, outside [0, {outer})"
+                )));
+            }
+            Ok(())
+        }
+        Checked::Valid(_) => Ok(()),
+    }
+}
+
+fn check_node(root: &Root, i: usize, n: &json::Node, lights: usize) -> Result<()> {
+    let name = label("node", i, n.name.as_deref());
+    if let Some(m) = n.mesh {
+        index_ok(&name, m, root.meshes.len())?;
+    }
+    if let Some(c) = n.camera {
+        index_ok(&name, c, root.cameras.len())?;
+    }
+    for &c in n.children.iter().flatten() {
+        index_ok(&format!("{name} child"), c, root.nodes.len())?;
+    }
+    if let Some(l) = n
+        .extensions
+        .as_ref()
+        .and_then(|e| e.khr_lights_punctual.as_ref())
+    {
+        index_ok(&format!("{name} light"), l.light, lights)?;
+    }
+    let finite = n.matrix.iter().flatten().all(|x| x.is_finite())
+        && n.translation.iter().flatten().all(|x| x.is_finite())
+        && n.scale.iter().flatten().all(|x| x.is_finite())
+        && n.rotation.iter().flat_map(|q| q.0).all(|x| x.is_finite());
+    if !finite {
+        return Err(bad(format!("{name} has a non-finite transform")));
+    }
+    Ok(())
+}
