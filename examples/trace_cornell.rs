@@ -15,13 +15,14 @@ fn main() -> Result<(), adaptive_pm::Error> {
     // Make the ceiling light directional: radiance cos^20(theta).
     scene.set_cosn(CosN::new(20.0)?);
 
-    // Embree: a device, then the committed (Send + Sync) geometry.
+    // Embree: a device, then the scene and its geometry owned together
+    // (Send + Sync and 'static: a tracer can be stored and shared).
     let device = Device::new()?;
-    let rt = scene.commit(&device)?;
+    let tracer = Tracer::new(scene.commit(&device)?);
+    let scene = tracer.scene();
 
     // Tracing threads need flush-to-zero for Embree: use its thread pool.
     let pool = thread_pool(0)?;
-    let mut tracer = Tracer::new(&scene, &rt);
     let config = TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000));
     let run = pool.install(|| tracer.trace(&config))?;
 

@@ -13,9 +13,9 @@
 //!
 //! let scene = Scene::cornell()?; // or Scene::load("scene.glb")?
 //! let device = Device::new()?;
-//! let rt = scene.commit(&device)?; // Embree geometry, Send + Sync
+//! // The scene and its Embree geometry, owned together (Send + Sync, 'static).
+//! let tracer = Tracer::new(scene.commit(&device)?);
 //! let pool = thread_pool(0)?; // rayon workers with FTZ/DAZ set for Embree
-//! let mut tracer = Tracer::new(&scene, &rt);
 //! let cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000));
 //! let run = pool.install(|| tracer.trace(&cfg))?;
 //! let maps = Maps::build(&run.records); // kd-trees: all photons, first hits only
@@ -42,6 +42,7 @@ pub mod engine;
 pub mod error;
 pub mod experiments;
 pub mod photon_map;
+pub mod raycast;
 pub mod render;
 pub mod rng;
 pub mod sampling;

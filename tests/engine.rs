@@ -5,7 +5,7 @@ use adaptive_pm::brdf::{Brdf, Lambert};
 use adaptive_pm::embree::{thread_pool, Device};
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::engine::{Budget, Maps, Mode, TraceConfig, Tracer};
-use adaptive_pm::scene::{Emission, Light, Material, PointLight, Scene};
+use adaptive_pm::scene::{Emission, Light, Material, PointLight, PreparedScene, Scene};
 use adaptive_pm::Error;
 use glam::Vec3;
 
@@ -73,10 +73,10 @@ fn run(
     threads: usize,
 ) -> (adaptive_pm::engine::TraceOutput, u64) {
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
     let pool = thread_pool(threads).unwrap();
     pool.install(|| {
-        let mut t = Tracer::new(scene, &rt);
+        let t = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
         let out = t.trace(cfg).unwrap();
         let sum = Maps::build(&out.records).full.checksum();
         (out, sum)
@@ -153,8 +153,8 @@ fn splitting_is_unbiased_floor_irradiance() {
         s
     };
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
-    let mut tracer = Tracer::new(&scene, &rt);
+    let rt = scene.embree_geometry(&device).unwrap();
+    let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
     let mut stats = Vec::new();
     for mode in [Mode::Classic, Mode::Adaptive] {
         let v: Vec<f64> = (0..6)
@@ -234,8 +234,8 @@ fn quality_zero_is_an_empty_map_and_one_is_a_budget_error() {
     assert!(Maps::build(&out.records).full.is_empty());
 
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
-    let mut t = Tracer::new(&scene, &rt);
+    let rt = scene.embree_geometry(&device).unwrap();
+    let t = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
     for mode in [Mode::Classic, Mode::Adaptive] {
         let e = t
             .trace(&TraceConfig::new(mode, Budget::Quality(1.0)))
@@ -287,8 +287,8 @@ fn scene_without_light_is_an_error() {
     let mut scene = closed_box(0.5, 0.0);
     scene.lights.clear();
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
-    let e = Tracer::new(&scene, &rt)
+    let rt = scene.embree_geometry(&device).unwrap();
+    let e = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap())
         .trace(&cfg(Mode::Classic, 100, 1))
         .unwrap_err();
     assert!(matches!(e, Error::InvalidScene(_)), "{e}");

@@ -29,8 +29,8 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     let cfg: TraceConfig = args.budget.config(args.mode)?;
     let pool = args.threads.pool()?;
     let device = Device::new()?;
-    let rt = scene.commit(&device)?;
-    let mut tracer = Tracer::new(&scene, &rt);
+    let tracer = Tracer::new(scene.commit(&device)?);
+    let scene = tracer.scene();
     let bar = progress_bar(!args.json);
     let out = pool.install(|| {
         tracer.trace_with_progress(&cfg, &|p| {

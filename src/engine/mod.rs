@@ -7,8 +7,8 @@
 //!
 //! let scene = Scene::cornell()?;
 //! let device = Device::new()?;
-//! let rt = scene.commit(&device)?;
-//! let mut tracer = Tracer::new(&scene, &rt);
+//! // The scene and its Embree geometry, owned together: a 'static tracer.
+//! let tracer = Tracer::new(scene.commit(&device)?);
 //! let run = tracer.trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000)))?;
 //! println!("{} photons stored", run.report.stored);
 //! # Ok::<(), adaptive_pm::Error>(())
@@ -23,7 +23,7 @@ pub mod report;
 pub mod tracer;
 pub mod wave;
 
-pub use config::{Budget, DensityTarget, Mode, TraceConfig};
+pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig};
 pub use measure::{measure, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};
 pub use tracer::{Progress, TraceOutput, Tracer};

@@ -2,21 +2,21 @@
 //! queue is empty or the depth limit is reached.
 
 use super::albedo::AlbedoTable;
-use super::config::{available_memory, DensityTarget, Mode, TraceConfig, DENSITY_CONTROL_K};
+use super::config::{CheckedConfig, DensityTarget, Mode, TraceConfig, DENSITY_CONTROL_K};
 use super::counts::{photon_power, plan_emission, LightPlan};
 use super::density_control::DensityControl;
 use super::report::TraceReport;
 use super::wave::{shade_batch, BatchOut, PathState, ShadeContext};
 use crate::analysis::{AnalysisCache, DirectionalityTable};
-use crate::embree::CommittedScene;
+use crate::raycast::RayCaster;
 use crate::error::{Error, Result};
 use crate::photon_map::PhotonRecord;
 use crate::rng::{hash2, Rng};
 use crate::sampling::luminance;
-use crate::scene::Scene;
+use crate::scene::{PreparedScene, Scene};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
 
 /// An upper bound of the children a wave can make: the sum over its photons of
@@ -89,37 +89,77 @@ pub struct TraceOutput {
     pub plans: Vec<LightPlan>,
 }
 
-/// Traces photons through one scene; keeps the directionality analyses
-/// between runs (each emission profile and BRDF is analysed once).
-pub struct Tracer<'s> {
-    scene: &'s Scene,
-    rt: &'s CommittedScene,
-    cache: Option<AnalysisCache>,
+/// Traces photons through one prepared scene (a [`Scene`] and the
+/// [`RayCaster`] built from it); keeps the directionality analyses between
+/// runs (each emission profile and BRDF is analysed once).
+///
+/// A tracer owns what it needs (`'static` when the caster is): store it in
+/// your own struct, share it between threads (`trace` takes `&self`; runs
+/// on several threads at once share the analysis cache).
+pub struct Tracer<C> {
+    prepared: Arc<PreparedScene<C>>,
+    cache: Mutex<Option<AnalysisCache>>,
 }
 
-impl<'s> Tracer<'s> {
-    /// A tracer for `scene`, whose Embree geometry is `rt` (from [`Scene::commit`]).
-    pub fn new(scene: &'s Scene, rt: &'s CommittedScene) -> Self {
+impl<C> std::fmt::Debug for Tracer<C> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Tracer")
+            .field("meshes", &self.prepared.scene().meshes.len())
+            .field("lights", &self.prepared.scene().lights.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<C: RayCaster> Tracer<C> {
+    /// A tracer for a prepared scene (from [`Scene::commit`] with Embree, or
+    /// [`PreparedScene::new`] with a caster of your own); pass it by value or
+    /// as an `Arc` to share it.
+    pub fn new(prepared: impl Into<Arc<PreparedScene<C>>>) -> Self {
         Tracer {
-            scene,
-            rt,
-            cache: None,
+            prepared: prepared.into(),
+            cache: Mutex::new(None),
         }
     }
 
-    /// The analyses done so far (`None` before the first run).
-    pub fn analysis_cache(&self) -> Option<&AnalysisCache> {
-        self.cache.as_ref()
+    /// Starts from analyses done before (by another tracer, or loaded): runs
+    /// whose analysis settings match it reuse them.
+    pub fn with_cache(self, cache: AnalysisCache) -> Self {
+        Tracer {
+            cache: Mutex::new(Some(cache)),
+            ..self
+        }
+    }
+
+    /// The scene traced.
+    pub fn scene(&self) -> &Scene {
+        self.prepared.scene()
+    }
+
+    /// The prepared scene (scene and caster).
+    pub fn prepared(&self) -> &Arc<PreparedScene<C>> {
+        &self.prepared
+    }
+
+    /// A copy of the analyses done so far (`None` before the first run).
+    pub fn analysis_cache(&self) -> Option<AnalysisCache> {
+        self.lock_cache().clone()
+    }
+
+    fn lock_cache(&self) -> std::sync::MutexGuard<'_, Option<AnalysisCache>> {
+        // A panic while analysing leaves a cache that is still consistent
+        // (entries are inserted whole), so a poisoned lock is taken as is.
+        self.cache.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
     /// Traces one run on the current rayon pool.
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for bad settings, [`Error::InvalidScene`] for a
-    /// scene without light, [`Error::Budget`] when the emitted photons alone
-    /// would not fit in the memory budget (Q = 1 on any real machine).
-    pub fn trace(&mut self, cfg: &TraceConfig) -> Result<TraceOutput> {
-        self.trace_with_progress(cfg, &|_| {})
+    /// scene without light or a hit on a material the scene does not have,
+    /// [`Error::Budget`] when the emitted photons alone would not fit in the
+    /// memory budget (Q = 1 on any real machine).
+    pub fn trace(&self, cfg: &TraceConfig) -> Result<TraceOutput> {
+        self.trace_checked(&cfg.check()?, &|_| {})
     }
 
     /// [`Tracer::trace`] with a progress callback, called from worker threads.
@@ -127,26 +167,49 @@ impl<'s> Tracer<'s> {
     /// # Errors
     /// As [`Tracer::trace`].
     pub fn trace_with_progress(
-        &mut self,
+        &self,
         cfg: &TraceConfig,
         progress: &(dyn Fn(Progress) + Sync),
     ) -> Result<TraceOutput> {
-        cfg.validate()?;
-        self.scene.validate()?;
-        let stale = self
-            .cache
+        self.trace_checked(&cfg.check()?, progress)
+    }
+
+    /// Emission plans and the alpha_D tables of the run, from the cache
+    /// (held only while analysing).
+    fn analyse(
+        &self,
+        cfg: &CheckedConfig,
+    ) -> Result<(Vec<LightPlan>, Vec<Option<Arc<DirectionalityTable>>>)> {
+        let mut guard = self.lock_cache();
+        let stale = guard
             .as_ref()
-            .is_none_or(|c| c.params() != &cfg.analysis || c.estimator() != cfg.estimator);
+            .is_none_or(|c| c.params() != cfg.analysis() || c.estimator() != cfg.estimator());
         if stale {
-            self.cache = Some(AnalysisCache::new(cfg.analysis, cfg.estimator)?);
+            *guard = Some(AnalysisCache::new(*cfg.analysis(), cfg.estimator())?);
         }
-        let Some(cache) = self.cache.as_mut() else {
+        let Some(cache) = guard.as_mut() else {
             unreachable!("set just above")
         };
-        let n_max = cfg.budget.n_max()?;
-        let plans = plan_emission(self.scene, cfg.mode, n_max, cache)?;
+        let plans = plan_emission(self.scene(), cfg.mode(), cfg.n_max(), cache)?;
+        let tables = material_tables(self.scene(), cache, cfg.mode())?;
+        Ok((plans, tables))
+    }
+
+    /// [`Tracer::trace_with_progress`] with settings checked beforehand.
+    ///
+    /// # Errors
+    /// As [`Tracer::trace`].
+    pub fn trace_checked(
+        &self,
+        cfg: &CheckedConfig,
+        progress: &(dyn Fn(Progress) + Sync),
+    ) -> Result<TraceOutput> {
+        let scene = self.prepared.scene();
+        scene.validate()?;
+        let (plans, tables) = self.analyse(cfg)?;
+        let n_max = cfg.n_max();
         let emitted: u64 = plans.iter().map(|p| p.photons).sum();
-        let budget_bytes = cfg.memory_budget.unwrap_or_else(|| available_memory() / 2);
+        let budget_bytes = cfg.memory_budget();
         let max_photons = budget_bytes / BYTES_PER_PHOTON_IN_FLIGHT;
         if emitted > max_photons {
             return Err(Error::Budget {
@@ -155,52 +218,48 @@ impl<'s> Tracer<'s> {
                 budget_bytes,
             });
         }
-        let tables = material_tables(self.scene, cache, cfg.mode)?;
-        let albedo: Vec<AlbedoTable> = self
-            .scene
+        let albedo: Vec<AlbedoTable> = scene
             .materials
             .iter()
             .map(|m| AlbedoTable::new(&m.brdf))
             .collect();
-        let (lo, hi) = self.scene.bounds();
+        let (lo, hi) = scene.bounds();
         let epsilon = 1e-5 * (hi - lo).length().max(1e-3);
-        let max_light_luminance = self
-            .scene
+        let max_light_luminance = scene
             .lights
             .iter()
             .map(|l| luminance(l.power()))
             .fold(0.0f32, f32::max);
 
-        let mut report = TraceReport::new(cfg.mode, n_max, &plans);
+        let mut report = TraceReport::new(cfg.mode(), n_max, &plans);
         let start = Instant::now();
         let mut queue = self.emit(cfg, &plans, epsilon);
         // Room for what a diffuse scene typically stores (about 3 hits per
         // emitted photon), so the first waves do not copy the array as it grows.
         let mut records: Vec<PhotonRecord> =
             Vec::with_capacity((emitted.saturating_mul(3)).min(max_photons) as usize);
-        let mut density = match cfg.mode {
+        let mut density = match cfg.mode() {
             Mode::Density if emitted > 0 => {
-                let target = match cfg.density_target {
+                let target = match cfg.density_target() {
                     DensityTarget::PerArea(d) => d,
                     DensityTarget::Auto => {
                         n_max as f64
-                            / self
-                                .scene
+                            / scene
                                 .surface_sampler()
                                 .total_area()
                                 .max(f64::MIN_POSITIVE)
                     }
                 };
                 Some(DensityControl::new(
-                    self.scene.bounds(),
+                    scene.bounds(),
                     target,
                     DENSITY_CONTROL_K,
                 )?)
             }
             _ => None,
         };
-        let mut splitting = cfg.mode == Mode::Adaptive;
-        for depth in 0..=cfg.max_depth {
+        let mut splitting = cfg.mode() == Mode::Adaptive;
+        for depth in 0..=cfg.max_depth() {
             if queue.is_empty() {
                 break;
             }
@@ -221,34 +280,34 @@ impl<'s> Tracer<'s> {
             if splitting {
                 let room =
                     (max_photons / 2).saturating_sub((records.len() + queue.len()) as u64) as f64;
-                let bound = split_bound(&queue, max_light_luminance, n_max, cfg.split_cap);
+                let bound = split_bound(&queue, max_light_luminance, n_max, cfg.split_cap());
                 if bound > room {
                     split_scale = room / bound;
                     report.budget_bound = true;
                 }
             }
             let ctx = ShadeContext {
-                scene: self.scene,
-                rt: self.rt,
+                scene,
+                caster: self.prepared.caster(),
                 tables: &tables,
                 albedo: &albedo,
-                alpha_min: cfg.analysis.alpha_min,
+                alpha_min: cfg.analysis().alpha_min,
                 max_light_luminance,
                 n_max_refl: if splitting {
                     n_max as f64 * split_scale
                 } else {
                     0.0
                 },
-                split_cap: cfg.split_cap,
-                continue_paths: depth < cfg.max_depth,
-                keep_normals: cfg.mode == Mode::Density,
+                split_cap: cfg.split_cap(),
+                continue_paths: depth < cfg.max_depth(),
+                keep_normals: cfg.mode() == Mode::Density,
                 epsilon,
                 depth: depth as u8,
             };
             let done = AtomicU64::new(0);
             let total = queue.len() as u64;
             let outs: Vec<BatchOut> = queue
-                .par_chunks(cfg.batch)
+                .par_chunks(cfg.batch())
                 .map(|batch| {
                     let out = shade_batch(&ctx, batch);
                     let d =
@@ -262,6 +321,12 @@ impl<'s> Tracer<'s> {
                 })
                 .collect();
             drop(queue);
+            if let Some(m) = outs.iter().find_map(|o| o.bad_material) {
+                return Err(Error::InvalidScene(format!(
+                    "the ray caster reported a hit on material {m}, but the scene has {} materials",
+                    scene.materials.len()
+                )));
+            }
             let stored_here: usize = outs.iter().map(|o| o.stored.len()).sum();
             if (records.len() + stored_here) as u64 > max_photons {
                 report.budget_bound = true;
@@ -301,12 +366,12 @@ impl<'s> Tracer<'s> {
     }
 
     /// Wave 0: every light's photons, photon `i` of light `l` keyed by (seed, l, i).
-    fn emit(&self, cfg: &TraceConfig, plans: &[LightPlan], epsilon: f32) -> Vec<PathState> {
+    fn emit(&self, cfg: &CheckedConfig, plans: &[LightPlan], epsilon: f32) -> Vec<PathState> {
         let total: u64 = plans.iter().map(|p| p.photons).sum();
         let mut queue = Vec::with_capacity(total as usize);
-        for (l, (light, plan)) in self.scene.lights.iter().zip(plans).enumerate() {
+        for (l, (light, plan)) in self.scene().lights.iter().zip(plans).enumerate() {
             let power = photon_power(light, plan);
-            let light_key = hash2(cfg.seed, l as u64);
+            let light_key = hash2(cfg.seed(), l as u64);
             // Indexed: par_extend keeps photon i at position start + i.
             queue.par_extend((0..plan.photons).into_par_iter().map(|i| {
                 let key = hash2(light_key, i);

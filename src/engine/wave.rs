@@ -8,8 +8,7 @@
 use super::albedo::AlbedoTable;
 use super::counts::{expected_children, round_stochastic};
 use crate::analysis::DirectionalityTable;
-use crate::brdf::Brdf;
-use crate::embree::{CommittedScene, Hit, Ray};
+use crate::raycast::{Hit, Ray, RayCaster};
 use crate::photon_map::PhotonRecord;
 use crate::rng::{hash2, Rng};
 use crate::sampling::{luminance, Frame};
@@ -31,9 +30,9 @@ pub struct PathState {
 }
 
 /// What shading needs to know about the run.
-pub(super) struct ShadeContext<'a> {
+pub(super) struct ShadeContext<'a, C> {
     pub scene: &'a Scene,
-    pub rt: &'a CommittedScene,
+    pub caster: &'a C,
     /// alpha_D tables by material (adaptive mode); `None` for delta BRDFs.
     pub tables: &'a [Option<Arc<DirectionalityTable>>],
     /// Albedo tables by material (the survival probability).
@@ -65,9 +64,11 @@ pub(super) struct BatchOut {
     pub hits: u64,
     pub escaped: u64,
     pub capped: u64,
+    /// A material index the scene does not have, reported by the caster.
+    pub bad_material: Option<u32>,
 }
 
-pub(super) fn shade_batch(ctx: &ShadeContext, batch: &[PathState]) -> BatchOut {
+pub(super) fn shade_batch<C: RayCaster>(ctx: &ShadeContext<C>, batch: &[PathState]) -> BatchOut {
     let rays: Vec<Ray> = batch
         .iter()
         .map(|p| Ray {
@@ -78,7 +79,7 @@ pub(super) fn shade_batch(ctx: &ShadeContext, batch: &[PathState]) -> BatchOut {
         })
         .collect();
     let mut hits: Vec<Option<Hit>> = vec![None; rays.len()];
-    ctx.rt.intersect_batch(&rays, &mut hits);
+    ctx.caster.intersect_batch(&rays, &mut hits);
     let mut out = BatchOut {
         stored: Vec::with_capacity(batch.len()),
         children: Vec::with_capacity(batch.len()),
@@ -93,7 +94,7 @@ pub(super) fn shade_batch(ctx: &ShadeContext, batch: &[PathState]) -> BatchOut {
     out
 }
 
-fn shade_hit(ctx: &ShadeContext, p: &PathState, h: &Hit, out: &mut BatchOut) {
+fn shade_hit<C>(ctx: &ShadeContext<C>, p: &PathState, h: &Hit, out: &mut BatchOut) {
     out.hits += 1;
     let position = p.origin + p.direction * h.t;
     // Surfaces are two-sided: shade on the side the photon arrives from.
@@ -103,7 +104,12 @@ fn shade_hit(ctx: &ShadeContext, p: &PathState, h: &Hit, out: &mut BatchOut) {
         h.ng
     };
     let material = h.material as usize;
-    let brdf: &Brdf = &ctx.scene.materials[material].brdf;
+    // A caster of the user's may report any index: an unknown one ends the
+    // run with an error (see the tracer), never a panic.
+    let Some(brdf) = ctx.scene.materials.get(material).map(|m| &m.brdf) else {
+        out.bad_material.get_or_insert(h.material);
+        return;
+    };
     if !brdf.is_delta() {
         out.stored.push(PhotonRecord {
             position,
