@@ -38,7 +38,7 @@ fn modes(c: &mut Criterion) {
 
     let classic = TraceConfig::new(Mode::Classic, Budget::NMax(N_MAX));
     let reference = Tracer::new(PreparedScene::new(scenes[0].clone(), &rt).unwrap()).trace(&classic).unwrap();
-    let ref_maps = Maps::build(&reference.records);
+    let ref_maps = Maps::from_photons(reference.photons.clone(), reference.frame);
     let target = measure(&ref_maps, &points).full.mean;
 
     let mut group = c.benchmark_group("modes");
@@ -66,11 +66,11 @@ fn modes(c: &mut Criterion) {
                 .trace(&TraceConfig::new(mode, Budget::NMax(N_MAX)))
                 .unwrap();
             let id = format!("{}/{n}", mode.name());
-            group.throughput(Throughput::Elements(out.records.len() as u64));
+            group.throughput(Throughput::Elements(out.photons.len() as u64));
             group.bench_function(BenchmarkId::new("build", &id), |b| {
-                b.iter(|| Maps::build(&out.records).full.len())
+                b.iter(|| Maps::from_photons(out.photons.clone(), out.frame).full.len())
             });
-            let maps = Maps::build(&out.records);
+            let maps = Maps::from_photons(out.photons.clone(), out.frame);
             group.throughput(Throughput::Elements(2 * points.len() as u64));
             group.bench_function(BenchmarkId::new("measure", &id), |b| {
                 b.iter(|| measure(&maps, &points).full.max)

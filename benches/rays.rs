@@ -258,7 +258,7 @@ fn bench_tracer(c: &mut Criterion) {
             b.iter_custom(|iters| {
                 pool.install(|| {
                     timed(iters, || {
-                        tracer.trace(black_box(&cfg)).unwrap().records.len()
+                        tracer.trace(black_box(&cfg)).unwrap().photons.len()
                     })
                 })
             })

@@ -38,7 +38,7 @@ fn main() -> Result<(), adaptive_pm::Error> {
     );
 
     // The balanced kd-trees (all photons, primary only) and their densities.
-    let maps = pool.install(|| Maps::build(&run.records));
+    let maps = pool.install(|| Maps::from_photons(run.photons.clone(), run.frame));
     let mut nearest = Vec::new();
     let p = glam::Vec3::new(278.0, 0.0, 279.5); // middle of the floor
     maps.full.nearest_k(p, 50, f32::INFINITY, &mut nearest);

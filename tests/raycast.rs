@@ -3,7 +3,7 @@
 //! mismatches that must be errors rather than panics.
 
 use adaptive_pm::embree::{thread_pool, CommittedScene, Device};
-use adaptive_pm::engine::{Budget, Maps, Mode, TraceConfig, Tracer};
+use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::raycast::{Hit, Ray, RayCaster};
 use adaptive_pm::scene::{PreparedScene, Scene};
 use adaptive_pm::Error;
@@ -11,7 +11,7 @@ use std::sync::Arc;
 
 fn checksum(tracer: &Tracer<impl RayCaster>, cfg: &TraceConfig) -> u64 {
     let out = tracer.trace(cfg).unwrap();
-    Maps::build(&out.records).full.checksum()
+    out.into_map().checksum()
 }
 
 /// A renderer's struct holding a tracer: compiles only if the tracer is `'static`.

@@ -23,7 +23,7 @@ fn maps(scene: &Scene, rt: &CommittedScene, mode: Mode, n_max: u64, seed: u64) -
     let mut cfg = TraceConfig::new(mode, Budget::NMax(n_max));
     cfg.seed = seed;
     let out = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap()).trace(&cfg).unwrap();
-    RenderMaps::build(&out.records)
+    RenderMaps::build(&out.records())
 }
 
 /// The quadrature irradiance averaged over a disc of radius `r` about `x`

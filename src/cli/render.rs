@@ -102,8 +102,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 bar.set_message(format!("depth {}", p.depth));
             })
         })?;
-        let maps = pool.install(|| RenderMaps::build(&out.records));
-        (Some(maps), t.elapsed().as_secs_f64(), out.records.len())
+        let maps = pool.install(|| RenderMaps::build(&out.records()));
+        (Some(maps), t.elapsed().as_secs_f64(), out.photons.len())
     };
     bar.set_position(0);
     bar.set_length(args.height as u64);

@@ -15,15 +15,18 @@
 //! ```
 
 pub mod albedo;
+mod buffer;
 pub mod config;
 pub mod counts;
 mod density_control;
 pub mod measure;
 pub mod report;
+pub mod stream;
 pub mod tracer;
 pub mod wave;
 
 pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig};
 pub use measure::{measure, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};
+pub use buffer::{map_frame, POWER_HEADROOM};
 pub use tracer::{Progress, TraceOutput, Tracer};

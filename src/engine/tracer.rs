@@ -3,19 +3,19 @@
 
 use super::albedo::AlbedoTable;
 use super::config::{CheckedConfig, DensityTarget, Mode, TraceConfig, DENSITY_CONTROL_K};
-use super::counts::{photon_power, plan_emission, LightPlan};
+use super::counts::{plan_emission, LightPlan};
 use super::density_control::DensityControl;
 use super::report::TraceReport;
-use super::wave::{shade_batch, BatchOut, PathState, ShadeContext};
+use super::stream::Schedule;
+use super::buffer::{map_frame, trace_wave};
+use super::wave::{PathState, ShadeContext};
 use crate::analysis::{AnalysisCache, DirectionalityTable};
 use crate::raycast::RayCaster;
 use crate::error::{Error, Result};
-use crate::photon_map::PhotonRecord;
-use crate::rng::{hash2, Rng};
+use crate::photon_map::{CompactPhoton, PhotonMap, PhotonRecord, Quantizer};
 use crate::sampling::luminance;
 use crate::scene::{PreparedScene, Scene};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
 
@@ -61,32 +61,51 @@ fn material_tables(
     Ok(tables)
 }
 
-/// Bytes one photon costs while a run is under way: its record, its queue
-/// entry, and its compact copy in the final map. Used to turn the memory
-/// budget into a photon count before anything is allocated.
-pub const BYTES_PER_PHOTON_IN_FLIGHT: u64 =
-    (std::mem::size_of::<PhotonRecord>() + std::mem::size_of::<PathState>() + 16) as u64;
+/// Bytes a stored photon costs: it is written once, compact, into the map
+/// buffer, and the kd-tree is built in place over it. The budget is this
+/// times the photons stored plus the pending paths (bounded by the waves);
+/// `Error::Budget` when the emitted photons alone would not fit.
+pub const BYTES_PER_STORED_PHOTON: u64 = std::mem::size_of::<CompactPhoton>() as u64;
 
 /// Progress of a run, for a progress bar.
 #[derive(Clone, Copy, Debug)]
 pub struct Progress {
     /// Bounce depth of the wave under way (0 = photons leaving the lights).
     pub depth: u32,
-    /// Photons of this wave traced so far.
+    /// Photons emitted so far (waves are streamed depth by depth).
     pub done: u64,
-    /// Photons in this wave.
+    /// Photons the run emits.
     pub total: u64,
 }
 
 /// The photons of a run and what it counted.
 #[derive(Clone, Debug)]
 pub struct TraceOutput {
-    /// Every stored photon, tagged with its depth, in a deterministic order.
-    pub records: Vec<PhotonRecord>,
+    /// Every stored photon, compact, in `frame` (in an order that depends on
+    /// the batch size; the kd-tree built over them does not).
+    pub photons: Vec<CompactPhoton>,
+    /// The frame the photons are encoded in ([`map_frame`]).
+    pub frame: Quantizer,
     /// Counts and timings.
     pub report: TraceReport,
     /// Per-light emission.
     pub plans: Vec<LightPlan>,
+}
+
+impl TraceOutput {
+    /// The stored photons, decoded (positions and powers as quantised).
+    pub fn records(&self) -> Vec<PhotonRecord> {
+        self.photons
+            .par_iter()
+            .with_min_len(4096)
+            .map(|p| self.frame.decode(p))
+            .collect()
+    }
+
+    /// The photon map of every stored photon, built in place (no copy).
+    pub fn into_map(self) -> PhotonMap {
+        PhotonMap::from_compact(self.photons, self.frame)
+    }
 }
 
 /// Traces photons through one prepared scene (a [`Scene`] and the
@@ -210,11 +229,11 @@ impl<C: RayCaster> Tracer<C> {
         let n_max = cfg.n_max();
         let emitted: u64 = plans.iter().map(|p| p.photons).sum();
         let budget_bytes = cfg.memory_budget();
-        let max_photons = budget_bytes / BYTES_PER_PHOTON_IN_FLIGHT;
+        let max_photons = budget_bytes / BYTES_PER_STORED_PHOTON;
         if emitted > max_photons {
             return Err(Error::Budget {
                 photons: emitted,
-                needed_bytes: emitted.saturating_mul(BYTES_PER_PHOTON_IN_FLIGHT),
+                needed_bytes: emitted.saturating_mul(BYTES_PER_STORED_PHOTON),
                 budget_bytes,
             });
         }
@@ -232,22 +251,14 @@ impl<C: RayCaster> Tracer<C> {
             .fold(0.0f32, f32::max);
 
         let mut report = TraceReport::new(cfg.mode(), n_max, &plans);
+        let frame = map_frame(scene, &plans);
         let start = Instant::now();
-        let mut queue = self.emit(cfg, &plans, epsilon);
-        // Room for what a diffuse scene typically stores (about 3 hits per
-        // emitted photon), so the first waves do not copy the array as it grows.
-        let mut records: Vec<PhotonRecord> =
-            Vec::with_capacity((emitted.saturating_mul(3)).min(max_photons) as usize);
         let mut density = match cfg.mode() {
             Mode::Density if emitted > 0 => {
                 let target = match cfg.density_target() {
                     DensityTarget::PerArea(d) => d,
                     DensityTarget::Auto => {
-                        n_max as f64
-                            / scene
-                                .surface_sampler()
-                                .total_area()
-                                .max(f64::MIN_POSITIVE)
+                        n_max as f64 / scene.surface_sampler().total_area().max(f64::MIN_POSITIVE)
                     }
                 };
                 Some(DensityControl::new(
@@ -258,15 +269,32 @@ impl<C: RayCaster> Tracer<C> {
             }
             _ => None,
         };
+        // The map buffer: reserved once for the most photons the run can
+        // store (address space only: pages are touched as photons arrive),
+        // so it never moves or copies while it fills.
+        let most = match cfg.mode() {
+            Mode::Adaptive => max_photons,
+            _ => emitted.saturating_mul(cfg.max_depth() as u64 + 1).min(max_photons),
+        };
+        let mut photons: Vec<CompactPhoton> = Vec::with_capacity(if density.is_some() {
+            0
+        } else {
+            most as usize
+        });
+        let mut schedule = Schedule::new(emitted, cfg.max_depth(), density.is_some());
+        let mut wave: Vec<PathState> = Vec::new();
         let mut splitting = cfg.mode() == Mode::Adaptive;
-        for depth in 0..=cfg.max_depth() {
-            if queue.is_empty() {
-                break;
-            }
+        // What the run holds, in stored photons' worth of memory: the buffer
+        // and the pending paths (a path is three photons' worth).
+        let path_cost = (std::mem::size_of::<PathState>() / BYTES_PER_STORED_PHOTON as usize) as u64;
+        while let Some(depth) = schedule.next_wave(scene, &plans, cfg.seed(), epsilon, &mut wave) {
             let wave_start = Instant::now();
-            // Splitting stops once the photons so far fill half the budget; the
-            // rest of the run is then classic Russian roulette.
-            if splitting && (records.len() + queue.len()) as u64 * 2 > max_photons {
+            let held = |photons: usize, pending: usize| photons as u64 + pending as u64 * path_cost;
+            let stored_so_far = photons.len() + density.as_ref().map_or(0, |d| d.counts().0 as usize);
+            let used = held(stored_so_far, schedule.pending_len() + wave.len());
+            // Splitting stops once the run holds half the budget; the rest
+            // of the run is then classic Russian roulette.
+            if splitting && used * 2 > max_photons {
                 splitting = false;
                 report.budget_bound = true;
             }
@@ -274,17 +302,22 @@ impl<C: RayCaster> Tracer<C> {
             // too, or one wave of splitting alone could exhaust memory (a
             // sharp light at a high Q: few photons, each split many times).
             // `s <= alpha_E(photon) N_MAX` (alpha_D <= 1), so the sum of that
-            // bound over the queue caps the children; when it exceeds the
+            // bound over the wave caps the children; when it exceeds the
             // room left, every `s` of this wave is scaled down to fit.
             let mut split_scale = 1.0;
             if splitting {
-                let room =
-                    (max_photons / 2).saturating_sub((records.len() + queue.len()) as u64) as f64;
-                let bound = split_bound(&queue, max_light_luminance, n_max, cfg.split_cap());
+                let room = ((max_photons / 2).saturating_sub(used) / (path_cost + 1)) as f64;
+                let bound = split_bound(&wave, max_light_luminance, n_max, cfg.split_cap());
                 if bound > room {
                     split_scale = room / bound;
                     report.budget_bound = true;
                 }
+            }
+            // Every photon of the wave may store once: stop before the
+            // buffer could overflow.
+            if density.is_none() && photons.len() + wave.len() > photons.capacity() {
+                report.budget_bound = true;
+                break;
             }
             let ctx = ShadeContext {
                 scene,
@@ -299,92 +332,60 @@ impl<C: RayCaster> Tracer<C> {
                     0.0
                 },
                 split_cap: cfg.split_cap(),
-                continue_paths: depth < cfg.max_depth(),
-                keep_normals: cfg.mode() == Mode::Density,
+                continue_paths: depth < cfg.max_depth() as usize,
+                keep_records: density.is_some(),
+                frame,
                 epsilon,
                 depth: depth as u8,
             };
-            let done = AtomicU64::new(0);
-            let total = queue.len() as u64;
-            let outs: Vec<BatchOut> = queue
-                .par_chunks(cfg.batch())
-                .map(|batch| {
-                    let out = shade_batch(&ctx, batch);
-                    let d =
-                        done.fetch_add(batch.len() as u64, Ordering::Relaxed) + batch.len() as u64;
-                    progress(Progress {
-                        depth,
-                        done: d,
-                        total,
-                    });
-                    out
-                })
-                .collect();
-            drop(queue);
+            let outs = trace_wave(&ctx, &wave, &mut photons, cfg.batch(), density.is_some());
             if let Some(m) = outs.iter().find_map(|o| o.bad_material) {
                 return Err(Error::InvalidScene(format!(
                     "the ray caster reported a hit on material {m}, but the scene has {} materials",
                     scene.materials.len()
                 )));
             }
-            let stored_here: usize = outs.iter().map(|o| o.stored.len()).sum();
-            if (records.len() + stored_here) as u64 > max_photons {
-                report.budget_bound = true;
-                break;
-            }
-            let mut next: Vec<PathState> =
-                Vec::with_capacity(outs.iter().map(|o| o.children.len()).sum());
-
-            let stats = report.depth_mut(depth as usize);
+            let stats = report.depth_mut(depth);
             for out in outs {
                 stats.hits += out.hits;
                 stats.escaped += out.escaped;
                 stats.capped += out.capped;
                 stats.children += out.children.len() as u64;
-                match &mut density {
-                    Some(dc) => dc.offer(&out.stored, &out.normals),
-                    None => records.extend_from_slice(&out.stored),
+                if let Some(dc) = &mut density {
+                    dc.offer(&out.records, &out.normals);
                 }
-                next.extend_from_slice(&out.children);
+                schedule.pending[depth + 1].extend_from_slice(&out.children);
             }
-            stats.seconds = wave_start.elapsed().as_secs_f64();
-            queue = next;
+            stats.seconds += wave_start.elapsed().as_secs_f64();
+            progress(Progress {
+                depth: depth as u32,
+                done: schedule.emitted_so_far(),
+                total: emitted,
+            });
         }
         if let Some(dc) = density {
             let (accepted, rejected) = dc.counts();
             report.density_rejected = rejected;
             report.density_accepted = accepted;
-            records = dc.into_records();
+            let records = dc.into_records();
+            photons = records
+                .par_iter()
+                .with_min_len(4096)
+                .filter(|r| r.position.is_finite() && r.power.is_finite())
+                .map(|r| frame.encode(r))
+                .collect();
         }
+        // Give back the reserved room never used (a large buffer shrinks in
+        // place: glibc's realloc of an mmap'd block is an mremap, no copy).
+        photons.shrink_to_fit();
         report.trace_s = start.elapsed().as_secs_f64();
-        report.finish(&records);
+        report.finish(&frame.power_sums(&photons));
         Ok(TraceOutput {
-            records,
+            photons,
+            frame,
             report,
             plans,
         })
     }
-
-    /// Wave 0: every light's photons, photon `i` of light `l` keyed by (seed, l, i).
-    fn emit(&self, cfg: &CheckedConfig, plans: &[LightPlan], epsilon: f32) -> Vec<PathState> {
-        let total: u64 = plans.iter().map(|p| p.photons).sum();
-        let mut queue = Vec::with_capacity(total as usize);
-        for (l, (light, plan)) in self.scene().lights.iter().zip(plans).enumerate() {
-            let power = photon_power(light, plan);
-            let light_key = hash2(cfg.seed(), l as u64);
-            // Indexed: par_extend keeps photon i at position start + i.
-            queue.par_extend((0..plan.photons).into_par_iter().map(|i| {
-                let key = hash2(light_key, i);
-                let mut rng = Rng::new(key);
-                let e = light.sample(rng.next_f32(), rng.next_2d(), rng.next_2d());
-                PathState {
-                    origin: e.origin + e.normal.unwrap_or_default() * epsilon,
-                    direction: e.direction,
-                    power: power * e.weight,
-                    key,
-                }
-            }));
-        }
-        queue
-    }
 }
+

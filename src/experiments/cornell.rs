@@ -337,8 +337,7 @@ fn run_one(
     alpha: &AlphaRow,
 ) -> Result<RunMetrics> {
     let out = tracer.trace(cfg)?;
-    let maps = Maps::build(&out.records);
-    drop(out.records);
+    let maps = Maps::from_photons(out.photons, out.frame);
     let t = Instant::now();
     let m = measure(&maps, points);
     let measure_s = t.elapsed().as_secs_f64();

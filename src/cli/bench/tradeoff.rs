@@ -147,8 +147,8 @@ fn trace(
     let out = Tracer::new(PreparedScene::new(scene.clone(), rt)?).trace(&cfg)?;
     let trace_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let maps = RenderMaps::build(&out.records);
-    Ok((maps, out.records.len(), trace_s, t.elapsed().as_secs_f64()))
+    let maps = RenderMaps::build(&out.records());
+    Ok((maps, out.photons.len(), trace_s, t.elapsed().as_secs_f64()))
 }
 
 fn render_cfg(args: &TradeoffArgs, spp: u32, k: usize, seed: u64, view: View) -> RenderConfig {
