@@ -2,17 +2,17 @@
 //! queue is empty or the depth limit is reached.
 
 use super::albedo::AlbedoTable;
+use super::buffer::{map_frame, trace_wave};
 use super::config::{CheckedConfig, DensityTarget, Mode, TraceConfig, DENSITY_CONTROL_K};
 use super::counts::{plan_emission, LightPlan};
 use super::density_control::DensityControl;
 use super::report::TraceReport;
 use super::stream::Schedule;
-use super::buffer::{map_frame, trace_wave};
 use super::wave::{PathState, ShadeContext};
 use crate::analysis::{AnalysisCache, DirectionalityTable};
-use crate::raycast::RayCaster;
 use crate::error::{Error, Result};
 use crate::photon_map::{CompactPhoton, PhotonMap, PhotonRecord, Quantizer};
+use crate::raycast::RayCaster;
 use crate::sampling::luminance;
 use crate::scene::{PreparedScene, Scene};
 use rayon::prelude::*;
@@ -269,28 +269,27 @@ impl<C: RayCaster> Tracer<C> {
             }
             _ => None,
         };
-        // The map buffer: reserved once for the most photons the run can
-        // store (address space only: pages are touched as photons arrive),
-        // so it never moves or copies while it fills.
-        let most = match cfg.mode() {
-            Mode::Adaptive => max_photons,
-            _ => emitted.saturating_mul(cfg.max_depth() as u64 + 1).min(max_photons),
-        };
-        let mut photons: Vec<CompactPhoton> = Vec::with_capacity(if density.is_some() {
-            0
-        } else {
-            most as usize
-        });
+        // The map buffer, reserved for what a diffuse scene typically
+        // stores (about 2-3 hits per emitted photon) and grown when needed up
+        // to the budget: a large buffer grows by mremap in glibc, without a
+        // copy. An allocation the OS refuses is a budget error, not an abort.
+        let mut photons: Vec<CompactPhoton> = Vec::new();
+        if density.is_none() {
+            let guess = emitted.saturating_mul(3).min(max_photons) as usize;
+            reserve(&mut photons, guess, budget_bytes)?;
+        }
         let mut schedule = Schedule::new(emitted, cfg.max_depth(), density.is_some());
         let mut wave: Vec<PathState> = Vec::new();
         let mut splitting = cfg.mode() == Mode::Adaptive;
         // What the run holds, in stored photons' worth of memory: the buffer
         // and the pending paths (a path is three photons' worth).
-        let path_cost = (std::mem::size_of::<PathState>() / BYTES_PER_STORED_PHOTON as usize) as u64;
+        let path_cost =
+            (std::mem::size_of::<PathState>() / BYTES_PER_STORED_PHOTON as usize) as u64;
         while let Some(depth) = schedule.next_wave(scene, &plans, cfg.seed(), epsilon, &mut wave) {
             let wave_start = Instant::now();
             let held = |photons: usize, pending: usize| photons as u64 + pending as u64 * path_cost;
-            let stored_so_far = photons.len() + density.as_ref().map_or(0, |d| d.counts().0 as usize);
+            let stored_so_far =
+                photons.len() + density.as_ref().map_or(0, |d| d.counts().0 as usize);
             let used = held(stored_so_far, schedule.pending_len() + wave.len());
             // Splitting stops once the run holds half the budget; the rest
             // of the run is then classic Russian roulette.
@@ -316,8 +315,13 @@ impl<C: RayCaster> Tracer<C> {
             // Every photon of the wave may store once: stop before the
             // buffer could overflow.
             if density.is_none() && photons.len() + wave.len() > photons.capacity() {
-                report.budget_bound = true;
-                break;
+                if (photons.len() + wave.len()) as u64 > max_photons {
+                    report.budget_bound = true;
+                    break;
+                }
+                let more = (photons.capacity().max(wave.len()) as u64)
+                    .min(max_photons - photons.len() as u64) as usize;
+                reserve(&mut photons, more, budget_bytes)?;
             }
             let ctx = ShadeContext {
                 scene,
@@ -389,3 +393,11 @@ impl<C: RayCaster> Tracer<C> {
     }
 }
 
+/// Reserves room for `more` photons, or says the budget cannot be met.
+fn reserve(photons: &mut Vec<CompactPhoton>, more: usize, budget_bytes: u64) -> Result<()> {
+    photons.try_reserve_exact(more).map_err(|_| Error::Budget {
+        photons: (photons.len() + more) as u64,
+        needed_bytes: (photons.len() + more) as u64 * BYTES_PER_STORED_PHOTON,
+        budget_bytes,
+    })
+}
