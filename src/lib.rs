@@ -18,7 +18,7 @@
 //! let pool = thread_pool(0)?; // rayon workers with FTZ/DAZ set for Embree
 //! let cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000));
 //! let run = pool.install(|| tracer.trace(&cfg))?;
-//! let maps = Maps::build(&run.records); // kd-trees: all photons, first hits only
+//! let maps = Maps::from_photons(run.photons, run.frame); // kd-trees: all, first hits
 //! let mut nearest = Vec::new();
 //! maps.full.nearest_k(glam::Vec3::new(278.0, 0.0, 279.5), 50, f32::INFINITY, &mut nearest);
 //! # Ok::<(), adaptive_pm::Error>(())

@@ -12,7 +12,7 @@
 //! let device = Device::new()?;
 //! let rt = scene.embree_geometry(&device)?;
 //! let run = Tracer::new(PreparedScene::new(scene.clone(), &rt)?).trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000)))?;
-//! let maps = RenderMaps::build(&run.records);
+//! let maps = RenderMaps::build(&run.records());
 //! let cfg = RenderConfig::new(64, 64);
 //! let image = render(&scene, &rt, Some(&maps), &cfg, &|_, _| {})?;
 //! image.write_exr("cornell.exr")?;
