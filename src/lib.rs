@@ -13,12 +13,12 @@
 //!
 //! let scene = Scene::cornell()?; // or Scene::load("scene.glb")?
 //! let device = Device::new()?;
-//! let rt = scene.commit(&device)?; // Embree geometry, Send + Sync
+//! // The scene and its Embree geometry, owned together (Send + Sync, 'static).
+//! let tracer = Tracer::new(scene.commit(&device)?);
 //! let pool = thread_pool(0)?; // rayon workers with FTZ/DAZ set for Embree
-//! let mut tracer = Tracer::new(&scene, &rt);
 //! let cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000));
 //! let run = pool.install(|| tracer.trace(&cfg))?;
-//! let maps = Maps::build(&run.records); // kd-trees: all photons, first hits only
+//! let maps = Maps::from_photons(run.photons, run.frame); // kd-trees: all, first hits
 //! let mut nearest = Vec::new();
 //! maps.full.nearest_k(glam::Vec3::new(278.0, 0.0, 279.5), 50, f32::INFINITY, &mut nearest);
 //! # Ok::<(), adaptive_pm::Error>(())
@@ -43,6 +43,7 @@ pub mod error;
 pub mod experiments;
 pub mod output;
 pub mod photon_map;
+pub mod raycast;
 pub mod render;
 pub mod rng;
 pub mod sampling;

@@ -13,6 +13,7 @@ mod gltf_data;
 mod gltf_graph;
 mod gltf_load;
 mod light;
+mod prepared;
 mod surface;
 pub mod validate;
 
@@ -20,10 +21,10 @@ pub use buffers::{percent_decode, resolve_inside, MAX_BUFFER_BYTES};
 pub use checks::MAX_COORDINATE;
 
 pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
+pub use prepared::PreparedScene;
 pub use surface::{SurfacePoint, SurfaceSampler};
 
 use crate::brdf::Brdf;
-use crate::embree::{CommittedScene, Device};
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::Vec3;
@@ -389,18 +390,8 @@ impl Scene {
         Ok(())
     }
 
-    /// Hands the geometry to Embree. A hit's `material` is the mesh's material
-    /// index and its `geom_id` the mesh index.
-    ///
-    /// # Errors
-    /// [`Error::Embree`] when Embree rejects the geometry.
-    pub fn commit(&self, device: &Device) -> Result<CommittedScene> {
-        let mut builder = device.scene_builder()?;
-        for m in &self.meshes {
-            builder.add_triangles(&m.positions, &m.indices, m.material as u32)?;
-        }
-        builder.commit()
-    }
+    // `commit` (the scene and its Embree geometry, owned together) is in
+    // src/embree/commit.rs: Embree-specific code stays in src/embree/.
 
     /// An area-uniform sampler over every triangle of the scene.
     pub fn surface_sampler(&self) -> SurfaceSampler {

@@ -38,7 +38,7 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
     }
     let scene = Scene::open(&args.scene)?;
     let device = Device::new()?;
-    let rt = scene.commit(&device)?;
+    let rt = scene.embree_geometry(&device)?;
     let eps = scene.ray_epsilon();
     let rays = scene
         .surface_sampler()
