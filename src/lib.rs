@@ -29,19 +29,42 @@
 //! tracer in its three modes), [`photon_map`] (compact photon, kd-tree,
 //! density), [`render`] (images from the map), [`experiments`] (the paper's
 //! Cornell sweep), [`embree`] (the safe Embree layer). Errors: [`Error`].
+//! # Features
+//!
+//! | feature | default | what it brings |
+//! |---|---|---|
+//! | `embree` | yes | [`embree`] (the Intel Embree ray caster, through `adaptive-pm-embree-sys`), `Scene::commit`, [`engine`], [`render`] |
+//! | `gltf` | yes | `Scene::load` of glTF 2.0 files and the built-in Cornell box (textures are ignored) |
+//! | `image-io` | yes | OpenEXR and PNG image files (`render::Image::write_exr`, `write_png`) |
+//! | `experiments` | with `cli` | the paper's experiments and their plots (`experiments`, for the command line: not a stable API) |
+//! | `cli` | yes | the `adaptive-pm` binary |
+//!
+//! [`photon_map`], [`brdf`], [`emitter`], [`analysis`], [`scene`] (built in
+//! code), [`sampling`] and [`rng`] build with no feature at all: no Embree, no
+//! libclang. A renderer that brings its own scenes and images depends on
+//! `adaptive-pm = { version = "0.1", default-features = false, features = ["embree"] }`
+//! (40 crates, `scripts/count-deps.sh`).
 #![warn(missing_docs)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 // `unsafe` lives in `embree-sys` and the one safe wrapper module below.
 #![deny(unsafe_code)]
 
 pub mod analysis;
 pub mod brdf;
+#[cfg(feature = "embree")]
 #[allow(unsafe_code)]
 pub mod embree;
 pub mod emitter;
+#[cfg(feature = "embree")]
 pub mod engine;
 pub mod error;
+// The paper's experiments drive the command line; they are not a stable API.
+#[cfg(feature = "experiments")]
+#[doc(hidden)]
 pub mod experiments;
 pub mod photon_map;
+pub mod prelude;
+#[cfg(feature = "embree")]
 pub mod render;
 pub mod rng;
 pub mod sampling;

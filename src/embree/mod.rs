@@ -15,11 +15,15 @@
 //!   [`DEFAULT_BATCH_KERNEL`]; both kernels are measured in `benches/rays.rs`.
 //! - [`set_flush_denormals`] / [`thread_pool`]: Embree's traversal expects
 //!   flush-to-zero and denormals-are-zero on every tracing thread.
-//! - [`throughput`]: the measurement behind `adaptive-pm bench rays`.
+//! - `throughput` (with the `cli` feature, hidden): the measurement behind
+//!   `adaptive-pm bench rays`.
 
 mod device;
 mod scene;
 mod threads;
+// The `bench rays` measurement: the command line's, not a library API.
+#[cfg(feature = "cli")]
+#[doc(hidden)]
 pub mod throughput;
 
 use glam::Vec3;
@@ -27,6 +31,8 @@ use glam::Vec3;
 pub use device::Device;
 pub use scene::{BatchKernel, CommittedScene, SceneBuilder, DEFAULT_BATCH_KERNEL, EMBREE_LARGE};
 pub use threads::{flush_denormals_enabled, set_flush_denormals, thread_pool};
+#[cfg(feature = "cli")]
+#[doc(hidden)]
 pub use throughput::{measure_throughput, Throughput};
 
 /// A ray segment `origin + t * dir`, `t` in `[tnear, tfar]`. `dir` need not

@@ -141,6 +141,7 @@ fn temp_path(path: &Path) -> PathBuf {
 
 /// Writes through `write` to a temporary file, then renames it to `path`; the
 /// temporary file is removed on failure.
+#[cfg(feature = "image-io")]
 fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> std::io::Result<()>) -> Result<()> {
     check_output_path(path)?;
     let tmp = temp_path(path);
@@ -152,6 +153,7 @@ fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> std::io::Result<()>) -
     Ok(())
 }
 
+#[cfg(feature = "image-io")]
 fn exr_io(e: exr::error::Error) -> std::io::Error {
     match e {
         exr::error::Error::Io(e) => e,
@@ -187,6 +189,11 @@ impl Image {
         Vec3::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
     }
 
+}
+
+/// Image files: the `image-io` feature.
+#[cfg(feature = "image-io")]
+impl Image {
     /// Writes linear RGB as a 32-bit float OpenEXR file (temporary name, then rename).
     ///
     /// # Errors

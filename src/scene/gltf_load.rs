@@ -40,7 +40,7 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
         source: Box::new(e),
     };
     let gltf = gltf::Gltf::from_slice(bytes).map_err(wrap)?;
-    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(wrap)?;
+    let buffers = super::gltf_buffers::load(&gltf.document, base, gltf.blob.clone())?;
     let doc = &gltf.document;
 
     let mut scene = Scene::new();
@@ -72,7 +72,7 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
                         prim.mode()
                     )));
                 }
-                let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+                let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
                 let Some(positions) = reader.read_positions() else {
                     return Err(Error::InvalidScene(format!(
                         "mesh `{}` primitive {pi} has no POSITION attribute",

@@ -84,6 +84,7 @@ impl SurfaceSampler {
     /// Incoherent rays for throughput measurements: origins area-uniform on the
     /// surfaces (offset by `epsilon` along the normal), directions
     /// cosine-distributed about the normal, on the side the normal faces.
+    #[cfg(feature = "embree")]
     pub fn incoherent_rays(
         &self,
         count: usize,
