@@ -1,0 +1,2 @@
+//! Placeholder until the ray-casting trait lands (see README).
+fn main() {}
