@@ -44,7 +44,7 @@
 //! libclang. A renderer that brings its own scenes and images depends on
 //! `adaptive-pm = { version = "0.1", default-features = false, features = ["embree"] }`
 //! (40 crates, `scripts/count-deps.sh`).
-#![warn(missing_docs)]
+#![warn(missing_docs, missing_debug_implementations)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 // `unsafe` lives in `embree-sys` and the one safe wrapper module below.
 #![deny(unsafe_code)]

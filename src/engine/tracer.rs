@@ -91,6 +91,7 @@ pub struct TraceOutput {
 
 /// Traces photons through one scene; keeps the directionality analyses
 /// between runs (each emission profile and BRDF is analysed once).
+#[derive(Debug)]
 pub struct Tracer<'s> {
     scene: &'s Scene,
     rt: &'s CommittedScene,

@@ -215,6 +215,7 @@ impl RenderConfig {
 }
 
 /// The photon maps a render reads, each a balanced kd-tree.
+#[derive(Debug)]
 pub struct RenderMaps {
     /// Every stored photon (final gather reads it at secondary hits; the map view).
     pub full: PhotonMap,
