@@ -13,7 +13,7 @@ use adaptive_pm::embree::Device;
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::engine::measure::{DENSITY_POINTS, DENSITY_POINTS_SEED};
 use adaptive_pm::engine::{measure, Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer};
-use adaptive_pm::scene::Scene;
+use adaptive_pm::scene::{PreparedScene, Scene};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::time::Duration;
 
@@ -31,19 +31,19 @@ fn modes(c: &mut Criterion) {
         })
         .collect();
     // one committed geometry serves every exponent: only the emission changes
-    let rt = scenes[0].commit(&device).unwrap();
+    let rt = scenes[0].embree_geometry(&device).unwrap();
     let points = scenes[0]
         .surface_sampler()
         .points(DENSITY_POINTS, DENSITY_POINTS_SEED);
 
     let classic = TraceConfig::new(Mode::Classic, Budget::NMax(N_MAX));
-    let reference = Tracer::new(&scenes[0], &rt).trace(&classic).unwrap();
-    let ref_maps = Maps::build(&reference.records);
+    let reference = Tracer::new(PreparedScene::new(scenes[0].clone(), &rt).unwrap()).trace(&classic).unwrap();
+    let ref_maps = Maps::from_photons(reference.photons.clone(), reference.frame);
     let target = measure(&ref_maps, &points).full.mean;
 
     let mut group = c.benchmark_group("modes");
     for (scene, n) in scenes.iter().zip(EXPONENTS) {
-        let mut tracer = Tracer::new(scene, &rt);
+        let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
         for mode in Mode::ALL {
             let mut cfg = TraceConfig::new(mode, Budget::NMax(N_MAX));
             if mode == Mode::Density {
@@ -62,15 +62,15 @@ fn modes(c: &mut Criterion) {
     let mut group = c.benchmark_group("maps");
     for (scene, n) in scenes.iter().zip(EXPONENTS) {
         for mode in [Mode::Classic, Mode::Adaptive] {
-            let out = Tracer::new(scene, &rt)
+            let out = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap())
                 .trace(&TraceConfig::new(mode, Budget::NMax(N_MAX)))
                 .unwrap();
             let id = format!("{}/{n}", mode.name());
-            group.throughput(Throughput::Elements(out.records.len() as u64));
+            group.throughput(Throughput::Elements(out.photons.len() as u64));
             group.bench_function(BenchmarkId::new("build", &id), |b| {
-                b.iter(|| Maps::build(&out.records).full.len())
+                b.iter(|| Maps::from_photons(out.photons.clone(), out.frame).full.len())
             });
-            let maps = Maps::build(&out.records);
+            let maps = Maps::from_photons(out.photons.clone(), out.frame);
             group.throughput(Throughput::Elements(2 * points.len() as u64));
             group.bench_function(BenchmarkId::new("measure", &id), |b| {
                 b.iter(|| measure(&maps, &points).full.max)

@@ -26,7 +26,7 @@ use adaptive_pm::embree::{
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::rng::Rng;
 use adaptive_pm::sampling::spherical_direction;
-use adaptive_pm::scene::Scene;
+use adaptive_pm::scene::{PreparedScene, Scene};
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use embree_sys as sys;
 use glam::Vec3;
@@ -180,7 +180,7 @@ fn bench_rays(c: &mut Criterion) {
     let cornell = Scene::cornell().unwrap();
     let mut cases = vec![(
         "cornell",
-        cornell.commit(&device).unwrap(),
+        cornell.embree_geometry(&device).unwrap(),
         vec![("incoherent", surface_rays(&cornell))],
     )];
     for (scene_name, n) in [("box12", 1), ("box49k", 64)] {
@@ -244,8 +244,8 @@ fn bench_tracer(c: &mut Criterion) {
         ("cornell", Scene::cornell().unwrap()),
         ("gallery", Scene::load(gallery).unwrap()),
     ] {
-        let rt = scene.commit(&device).unwrap();
-        let mut tracer = Tracer::new(&scene, &rt);
+        let rt = scene.embree_geometry(&device).unwrap();
+        let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
         // The ray count of a run is fixed by its seed.
         let rays_per_trace = pool.install(|| tracer.trace(&cfg).unwrap().report.rays);
         let rays = surface_rays(&scene);
@@ -258,7 +258,7 @@ fn bench_tracer(c: &mut Criterion) {
             b.iter_custom(|iters| {
                 pool.install(|| {
                     timed(iters, || {
-                        tracer.trace(black_box(&cfg)).unwrap().records.len()
+                        tracer.trace(black_box(&cfg)).unwrap().photons.len()
                     })
                 })
             })

@@ -15,13 +15,14 @@ fn main() -> Result<(), adaptive_pm::Error> {
     // Make the ceiling light directional: radiance cos^20(theta).
     scene.set_cosn(CosN::new(20.0)?);
 
-    // Embree: a device, then the committed (Send + Sync) geometry.
+    // Embree: a device, then the scene and its geometry owned together
+    // (Send + Sync and 'static: a tracer can be stored and shared).
     let device = Device::new()?;
-    let rt = scene.commit(&device)?;
+    let tracer = Tracer::new(scene.commit(&device)?);
+    let scene = tracer.scene();
 
     // Tracing threads need flush-to-zero for Embree: use its thread pool.
     let pool = thread_pool(0)?;
-    let mut tracer = Tracer::new(&scene, &rt);
     let config = TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000));
     let run = pool.install(|| tracer.trace(&config))?;
 
@@ -37,7 +38,7 @@ fn main() -> Result<(), adaptive_pm::Error> {
     );
 
     // The balanced kd-trees (all photons, primary only) and their densities.
-    let maps = pool.install(|| Maps::build(&run.records));
+    let maps = pool.install(|| Maps::from_photons(run.photons.clone(), run.frame));
     let mut nearest = Vec::new();
     let p = glam::Vec3::new(278.0, 0.0, 279.5); // middle of the floor
     maps.full.nearest_k(p, 50, f32::INFINITY, &mut nearest);

@@ -13,9 +13,9 @@
 //!
 //! let scene = Scene::cornell()?; // or Scene::load("scene.glb")?
 //! let device = Device::new()?;
-//! let rt = scene.commit(&device)?; // Embree geometry, Send + Sync
+//! // The scene and its Embree geometry, owned together (Send + Sync, 'static).
+//! let tracer = Tracer::new(scene.commit(&device)?);
 //! let pool = thread_pool(0)?; // rayon workers with FTZ/DAZ set for Embree
-//! let mut tracer = Tracer::new(&scene, &rt);
 //! let cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000));
 //! let run = pool.install(|| tracer.trace(&cfg))?;
 //! let maps = Maps::build(&run.records); // kd-trees: all photons, first hits only
@@ -29,6 +29,7 @@
 //! tracer in its three modes), [`photon_map`] (compact photon, kd-tree,
 //! density), [`render`] (images from the map), [`experiments`] (the paper's
 //! Cornell sweep), [`embree`] (the safe Embree layer). Errors: [`Error`].
+//!
 //! # Features
 //!
 //! | feature | default | what it brings |
@@ -55,7 +56,6 @@ pub mod brdf;
 #[allow(unsafe_code)]
 pub mod embree;
 pub mod emitter;
-#[cfg(feature = "embree")]
 pub mod engine;
 pub mod error;
 // The paper's experiments drive the command line; they are not a stable API.
@@ -64,6 +64,7 @@ pub mod error;
 pub mod experiments;
 pub mod photon_map;
 pub mod prelude;
+pub mod raycast;
 #[cfg(feature = "embree")]
 pub mod render;
 pub mod rng;

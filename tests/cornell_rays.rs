@@ -10,7 +10,7 @@ use glam::Vec3;
 fn a_ray_down_from_the_light_centre_hits_the_floor_below() {
     let scene = Scene::cornell().unwrap();
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
     let centre = Vec3::new(278.0, 548.0, 279.5);
     let hit = rt
         .intersect(&Ray::new(centre, -Vec3::Y))
@@ -54,10 +54,10 @@ fn the_box_closed_by_a_front_wall_traps_every_ray() {
         .add_mesh("front", front, vec![[0, 1, 2], [0, 2, 3]], white)
         .unwrap();
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
     let mut rng = Rng::new(11);
     let mut escaped_open = 0;
-    let open_rt = Scene::cornell().unwrap().commit(&device).unwrap();
+    let open_rt = Scene::cornell().unwrap().embree_geometry(&device).unwrap();
     for _ in 0..100_000 {
         // a point inside the box, above the blocks' tops where it could be inside a block
         let o = Vec3::new(

@@ -5,7 +5,7 @@ use adaptive_pm::brdf::{Brdf, Lambert};
 use adaptive_pm::embree::{thread_pool, Device};
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::engine::{Budget, Maps, Mode, TraceConfig, Tracer};
-use adaptive_pm::scene::{Emission, Light, Material, PointLight, Scene};
+use adaptive_pm::scene::{Emission, Light, Material, PointLight, PreparedScene, Scene};
 use adaptive_pm::Error;
 use glam::Vec3;
 
@@ -73,12 +73,12 @@ fn run(
     threads: usize,
 ) -> (adaptive_pm::engine::TraceOutput, u64) {
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
     let pool = thread_pool(threads).unwrap();
     pool.install(|| {
-        let mut t = Tracer::new(scene, &rt);
+        let t = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
         let out = t.trace(cfg).unwrap();
-        let sum = Maps::build(&out.records).full.checksum();
+        let sum = out.clone().into_map().checksum();
         (out, sum)
     })
 }
@@ -153,14 +153,14 @@ fn splitting_is_unbiased_floor_irradiance() {
         s
     };
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
-    let mut tracer = Tracer::new(&scene, &rt);
+    let rt = scene.embree_geometry(&device).unwrap();
+    let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
     let mut stats = Vec::new();
     for mode in [Mode::Classic, Mode::Adaptive] {
         let v: Vec<f64> = (0..6)
             .map(|seed| {
                 let out = tracer.trace(&cfg(mode, 20_000, 100 + seed)).unwrap();
-                out.records
+                out.records()
                     .iter()
                     .filter(|r| r.position.y < 0.05 && r.direction.y < 0.0)
                     .map(|r| adaptive_pm::sampling::luminance(r.power) as f64)
@@ -230,12 +230,12 @@ fn quality_zero_is_an_empty_map_and_one_is_a_budget_error() {
         2,
     );
     assert_eq!(out.report.emitted, 0);
-    assert!(out.records.is_empty());
-    assert!(Maps::build(&out.records).full.is_empty());
+    assert!(out.photons.is_empty());
+    assert!(Maps::from_photons(out.photons.clone(), out.frame).full.is_empty());
 
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
-    let mut t = Tracer::new(&scene, &rt);
+    let rt = scene.embree_geometry(&device).unwrap();
+    let t = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
     for mode in [Mode::Classic, Mode::Adaptive] {
         let e = t
             .trace(&TraceConfig::new(mode, Budget::Quality(1.0)))
@@ -289,8 +289,8 @@ fn scene_without_light_is_an_error() {
     let mut scene = closed_box(0.5, 0.0);
     scene.lights.clear();
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
-    let e = Tracer::new(&scene, &rt)
+    let rt = scene.embree_geometry(&device).unwrap();
+    let e = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap())
         .trace(&cfg(Mode::Classic, 100, 1))
         .unwrap_err();
     assert!(matches!(e, Error::InvalidScene(_)), "{e}");
@@ -317,7 +317,7 @@ fn albedo_zero_and_one_and_extreme_exponents_terminate() {
                 assert_eq!(r.depths[8].hits, r.emitted);
             }
             assert!(out
-                .records
+                .records()
                 .iter()
                 .all(|p| p.power.is_finite() && p.position.is_finite()));
         }
@@ -327,13 +327,14 @@ fn albedo_zero_and_one_and_extreme_exponents_terminate() {
 #[test]
 fn the_memory_budget_bounds_a_wave_of_splitting() {
     // A cos^200 light at N_MAX = 1e6 emits ~17 000 photons that would each
-    // split ~60-fold at the first hit: 1e6 children. With room for 200 000
-    // photons, the wave's splitting is scaled down to fit, and says so.
+    // split ~60-fold at the first hit: 1e6 children. With room for 800 000
+    // stored photons' worth (a pending path costs three: 48 bytes against
+    // 16), the wave's splitting is scaled down to fit, and says so.
     let mut scene = Scene::cornell().unwrap();
     scene.set_cosn(CosN::new(200.0).unwrap());
-    let max_photons = 200_000u64;
+    let max_photons = 800_000u64;
     let mut c = cfg(Mode::Adaptive, 1_000_000, 4);
-    c.memory_budget = Some(max_photons * adaptive_pm::engine::tracer::BYTES_PER_PHOTON_IN_FLIGHT);
+    c.memory_budget = Some(max_photons * adaptive_pm::engine::tracer::BYTES_PER_STORED_PHOTON);
     let (out, _) = run(&scene, &c, 2);
     let r = &out.report;
     assert!(r.budget_bound);

@@ -9,7 +9,7 @@ use adaptive_pm::render::{
     floor_points, irradiance_estimate, quadrature_irradiance, render, rmse, Image, Lookup,
     RenderConfig, RenderMaps, View,
 };
-use adaptive_pm::scene::Scene;
+use adaptive_pm::scene::{PreparedScene, Scene};
 use adaptive_pm::Error;
 use glam::Vec3;
 
@@ -22,8 +22,8 @@ fn cornell(n: f32) -> Scene {
 fn maps(scene: &Scene, rt: &CommittedScene, mode: Mode, n_max: u64, seed: u64) -> RenderMaps {
     let mut cfg = TraceConfig::new(mode, Budget::NMax(n_max));
     cfg.seed = seed;
-    let out = Tracer::new(scene, rt).trace(&cfg).unwrap();
-    RenderMaps::build(&out.records)
+    let out = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap()).trace(&cfg).unwrap();
+    RenderMaps::build(&out.records())
 }
 
 /// The quadrature irradiance averaged over a disc of radius `r` about `x`
@@ -69,7 +69,7 @@ fn primary_map_irradiance_matches_the_light_quadrature() {
     let device = Device::new().unwrap();
     for n in [0.0f32, 50.0] {
         let scene = cornell(n);
-        let rt = scene.commit(&device).unwrap();
+        let rt = scene.embree_geometry(&device).unwrap();
         // Classic mode: every depth-0 photon of the light has the same power.
         let m = maps(&scene, &rt, Mode::Classic, 300_000, 11);
         let k = 400;
@@ -128,7 +128,7 @@ fn primary_map_irradiance_matches_the_light_quadrature() {
 fn image_error_falls_as_the_budget_grows_in_every_mode() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
-    let rt = scene.commit(&device).unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
     let view_cfg = |k: usize| {
         let mut c = RenderConfig::new(20, 20);
         c.view = View::Map {
@@ -170,7 +170,7 @@ fn image_error_falls_as_the_budget_grows_in_every_mode() {
 fn full_and_map_views_agree_on_the_mean() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
-    let rt = scene.commit(&device).unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
     let m = maps(&scene, &rt, Mode::Adaptive, 50_000, 3);
     let mut cfg = RenderConfig::new(24, 24);
     cfg.spp = 4;
@@ -201,7 +201,7 @@ fn full_and_map_views_agree_on_the_mean() {
 fn tiny_render_round_trips_through_exr_and_is_deterministic() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
-    let rt = scene.commit(&device).unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
     let m = maps(&scene, &rt, Mode::Adaptive, 10_000, 1);
     let mut cfg = RenderConfig::new(7, 5);
     cfg.spp = 2;
@@ -227,7 +227,7 @@ fn tiny_render_round_trips_through_exr_and_is_deterministic() {
 fn bad_sizes_and_paths_are_clear_errors_without_partial_files() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
-    let rt = scene.commit(&device).unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
     for (w, h) in [(0, 4), (4, 0), (20_000, 4), (16_384, 16_384 + 1)] {
         let cfg = RenderConfig::new(w, h);
         let e = render(&scene, &rt, None, &cfg, &|_, _| {}).unwrap_err();

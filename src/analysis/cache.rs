@@ -14,7 +14,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 /// Memoised directionality of emitters and BRDFs.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct AnalysisCache {
     params: AnalysisParams,
     estimator: Estimator,

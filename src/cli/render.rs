@@ -3,6 +3,7 @@
 
 use super::common::{open_scene, progress_bar, BudgetArgs, ThreadArgs};
 use adaptive_pm::embree::Device;
+use adaptive_pm::scene::PreparedScene;
 use adaptive_pm::engine::{Mode, Tracer};
 use adaptive_pm::render::{
     check_output_path, render, RenderConfig, RenderMaps, ToneMap, View, DEFAULT_K,
@@ -87,13 +88,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     let pool = args.threads.pool()?;
     let device = Device::new()?;
-    let rt = scene.commit(&device)?;
+    let rt = scene.embree_geometry(&device)?;
     let bar = progress_bar(!args.json);
     let (maps, trace_s, photons) = if view == View::DirectOnly {
         (None, 0.0, 0)
     } else {
         let t = Instant::now();
-        let mut tracer = Tracer::new(&scene, &rt);
+        let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt)?);
         let out = pool.install(|| {
             tracer.trace_with_progress(&trace_cfg, &|p| {
                 bar.set_length(p.total);
@@ -101,8 +102,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 bar.set_message(format!("depth {}", p.depth));
             })
         })?;
-        let maps = pool.install(|| RenderMaps::build(&out.records));
-        (Some(maps), t.elapsed().as_secs_f64(), out.records.len())
+        let maps = pool.install(|| RenderMaps::build(&out.records()));
+        (Some(maps), t.elapsed().as_secs_f64(), out.photons.len())
     };
     bar.set_position(0);
     bar.set_length(args.height as u64);

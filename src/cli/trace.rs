@@ -3,8 +3,9 @@
 
 use super::common::{open_scene, progress_bar, BudgetArgs, ThreadArgs};
 use adaptive_pm::embree::Device;
-use adaptive_pm::engine::measure::{DENSITY_POINTS, DENSITY_POINTS_SEED};
-use adaptive_pm::engine::{measure, Maps, Mode, TraceConfig, Tracer};
+use adaptive_pm::engine::measure::{DENSITY_K, DENSITY_POINTS, DENSITY_POINTS_SEED};
+use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
+use adaptive_pm::photon_map::density_stats_where;
 use serde_json::json;
 
 /// Arguments of `trace`.
@@ -29,8 +30,8 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     let cfg: TraceConfig = args.budget.config(args.mode)?;
     let pool = args.threads.pool()?;
     let device = Device::new()?;
-    let rt = scene.commit(&device)?;
-    let mut tracer = Tracer::new(&scene, &rt);
+    let tracer = Tracer::new(scene.commit(&device)?);
+    let scene = tracer.scene();
     let bar = progress_bar(!args.json);
     let out = pool.install(|| {
         tracer.trace_with_progress(&cfg, &|p| {
@@ -40,15 +41,28 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         })
     })?;
     bar.finish_and_clear();
-    let points = scene
+    let points: Vec<glam::Vec3> = scene
         .surface_sampler()
-        .points(DENSITY_POINTS, DENSITY_POINTS_SEED);
-    let (maps, metrics) = pool.install(|| {
-        let maps = Maps::build(&out.records);
-        let metrics = measure(&maps, &points);
-        (maps, metrics)
+        .points(DENSITY_POINTS, DENSITY_POINTS_SEED)
+        .iter()
+        .map(|p| p.position)
+        .collect();
+    // One map, built in place over the traced photons: the primary
+    // statistics count only its depth-0 photons (the same k nearest as a
+    // map of them alone), so the peak memory is the map itself.
+    let (report, plans) = (out.report.clone(), out.plans.clone());
+    let (map, build_s, full, primary) = pool.install(|| {
+        let t = std::time::Instant::now();
+        let map = out.into_map();
+        let build_s = t.elapsed().as_secs_f64();
+        let full = density_stats_where(&map, &points, DENSITY_K, |_| true);
+        let primary = density_stats_where(&map, &points, DENSITY_K, |p| p.depth() == 0);
+        (map, build_s, full, primary)
     });
-    let r = &out.report;
+    let checksum = map.checksum();
+    let peak_rss_bytes = peak_rss_bytes();
+    let out = (report, plans);
+    let r = &out.0;
     let value = json!({
         "scene": args.scene,
         "mode": args.mode.name(),
@@ -57,32 +71,35 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         "threads": pool.current_num_threads(),
         "emitted": r.emitted,
         "emitted_per_light": r.emitted_per_light,
-        "lights": out.plans,
+        "lights": out.1,
         "stored": r.stored,
         "stored_primary": r.stored_primary,
         "reemitted_first_hit": r.reemitted_first_hit,
         "split_rate_by_depth": r.split_rate_by_depth,
         "depths": r.depths,
-        "max_density": metrics.full.max,
-        "mean_density": metrics.full.mean,
-        "sigma_density": metrics.full.sigma,
-        "sigma_over_mean": metrics.full.sigma_over_mean,
-        "max_density_primary": metrics.primary.max,
-        "mean_density_primary": metrics.primary.mean,
-        "sigma_density_primary": metrics.primary.sigma,
-        "sigma_over_mean_primary": metrics.primary.sigma_over_mean,
+        "max_density": full.max,
+        "mean_density": full.mean,
+        "sigma_density": full.sigma,
+        "sigma_over_mean": full.sigma_over_mean,
+        "max_density_primary": primary.max,
+        "mean_density_primary": primary.mean,
+        "sigma_density_primary": primary.sigma,
+        "sigma_over_mean_primary": primary.sigma_over_mean,
         "trace_s": r.trace_s,
         "rays": r.rays,
+        "rays_traced": r.rays,
+        "rays_per_s": r.rays_per_s,
         "mrays_per_s": r.mrays_per_s,
+        "peak_rss_bytes": peak_rss_bytes,
+        "map_bytes": map.memory_bytes(),
         "trace_primary_s": r.trace_primary_s,
-        "build_s": maps.build_s,
-        "build_primary_s": maps.build_primary_s,
-        "bytes_per_photon": metrics.bytes_per_photon,
+        "build_s": build_s,
+        "bytes_per_photon": map.bytes_per_photon(),
         "budget_bound": r.budget_bound,
         "capped_hits": r.capped_hits,
         "density_rejected": r.density_rejected,
         "stored_power": r.stored_power,
-        "checksum": format!("{:016x}", metrics.checksum),
+        "checksum": format!("{checksum:016x}"),
     });
     if args.json {
         println!("{value}");
@@ -96,7 +113,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         cfg.seed,
         pool.current_num_threads()
     );
-    for (i, p) in out.plans.iter().enumerate() {
+    for (i, p) in out.1.iter().enumerate() {
         println!(
             "  light {i}: {} photons (alpha_E {:.3}, alpha_A {:.3}, alpha_D {:.4})",
             p.photons, p.alpha_e, p.alpha_a, p.alpha_d
@@ -116,22 +133,24 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     println!("split rate     {} (by depth)", rates.join(" "));
     println!(
         "density        max {:.4e}  mean {:.4e}  sigma {:.4e}  sigma/mean {:.3}",
-        metrics.full.max, metrics.full.mean, metrics.full.sigma, metrics.full.sigma_over_mean
+        full.max, full.mean, full.sigma, full.sigma_over_mean
     );
     println!(
         "primary        max {:.4e}  mean {:.4e}  sigma {:.4e}  sigma/mean {:.3}",
-        metrics.primary.max,
-        metrics.primary.mean,
-        metrics.primary.sigma,
-        metrics.primary.sigma_over_mean
+        primary.max,
+        primary.mean,
+        primary.sigma,
+        primary.sigma_over_mean
     );
     println!(
-        "time           trace {:.3} s, kd-tree {:.3} s",
-        r.trace_s, maps.build_s
+        "time           trace {:.3} s ({:.2} Mrays/s), kd-tree {:.3} s",
+        r.trace_s, r.mrays_per_s, build_s
     );
     println!(
-        "memory         {:.0} bytes per photon",
-        metrics.bytes_per_photon
+        "memory         {} bytes per photon, map {} MB, peak RSS {} MB",
+        map.bytes_per_photon(),
+        map.memory_bytes() >> 20,
+        peak_rss_bytes >> 20
     );
     if r.budget_bound {
         println!("note: the memory budget bound (raise --budget-mb)");
@@ -142,6 +161,20 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             r.capped_hits
         );
     }
-    println!("checksum       {:016x}", metrics.checksum);
+    println!("checksum       {checksum:016x}");
     Ok(())
+}
+
+/// The process's peak resident memory (`VmHWM` of /proc/self/status), in
+/// bytes; 0 where the OS does not say.
+fn peak_rss_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|kb| kb.parse::<u64>().ok())
+        })
+        .map_or(0, |kb| kb * 1024)
 }

@@ -140,12 +140,13 @@ impl TraceConfig {
         }
     }
 
-    /// Checks the settings.
+    /// Checks every setting once and resolves the derived ones (`N_MAX`,
+    /// the memory budget in bytes): the form the engine runs on.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] naming the first bad one.
-    pub fn validate(&self) -> Result<()> {
-        self.budget.n_max()?;
+    /// [`Error::InvalidParameter`] naming the first bad setting.
+    pub fn check(&self) -> Result<CheckedConfig> {
+        let n_max = self.budget.n_max()?;
         if self.split_cap == 0 {
             return Err(Error::param("split cap", "must be at least 1"));
         }
@@ -166,8 +167,86 @@ impl TraceConfig {
         if self.batch == 0 {
             return Err(Error::param("batch", "must be at least 1"));
         }
-        Ok(())
+        self.analysis.validate()?;
+        Ok(CheckedConfig {
+            raw: self.clone(),
+            n_max,
+            memory_budget: self
+                .memory_budget
+                .unwrap_or_else(|| default_memory_budget(available_memory())),
+        })
     }
+
+    /// Checks the settings ([`TraceConfig::check`] without keeping the result).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        self.check().map(|_| ())
+    }
+}
+
+/// A [`TraceConfig`] whose every invariant holds (the high-level form of the
+/// settings, as ripgrep turns its low-level arguments into checked ones): the
+/// only way to make one is [`TraceConfig::check`], and the engine takes
+/// nothing else, so no setting is validated twice or forgotten.
+#[derive(Clone, Debug)]
+pub struct CheckedConfig {
+    raw: TraceConfig,
+    n_max: u64,
+    memory_budget: u64,
+}
+
+impl CheckedConfig {
+    /// The settings as given.
+    pub fn settings(&self) -> &TraceConfig {
+        &self.raw
+    }
+    /// The mode.
+    pub fn mode(&self) -> Mode {
+        self.raw.mode
+    }
+    /// `N_MAX` (from Q or given).
+    pub fn n_max(&self) -> u64 {
+        self.n_max
+    }
+    /// Seed of every random number.
+    pub fn seed(&self) -> u64 {
+        self.raw.seed
+    }
+    /// Bounce limit (at most 250).
+    pub fn max_depth(&self) -> u32 {
+        self.raw.max_depth
+    }
+    /// Per-hit cap on children (at least 1).
+    pub fn split_cap(&self) -> u32 {
+        self.raw.split_cap
+    }
+    /// Memory allowed for photons, in bytes (the default resolved).
+    pub fn memory_budget(&self) -> u64 {
+        self.memory_budget
+    }
+    /// The directionality estimator.
+    pub fn estimator(&self) -> Estimator {
+        self.raw.estimator
+    }
+    /// The analysis constants (validated).
+    pub fn analysis(&self) -> &AnalysisParams {
+        &self.raw.analysis
+    }
+    /// Density control's target (a positive density when given).
+    pub fn density_target(&self) -> DensityTarget {
+        self.raw.density_target
+    }
+    /// Photons per parallel batch (at least 1).
+    pub fn batch(&self) -> usize {
+        self.raw.batch
+    }
+}
+
+/// The memory budget when none is given: see [`TraceConfig::memory_budget`].
+pub fn default_memory_budget(available: u64) -> u64 {
+    available / 2
 }
 
 /// Bytes of available memory (Linux `MemAvailable`), or 4 GiB when unknown.

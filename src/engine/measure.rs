@@ -2,7 +2,8 @@
 //! map of primary photons (stored at their first hit), each a balanced kd-tree,
 //! and the photon density `k / (pi r_k^2)` over fixed surface points.
 
-use crate::photon_map::{density_stats, DensityStats, PhotonMap, PhotonRecord};
+use crate::photon_map::{density_stats, CompactPhoton, DensityStats, PhotonMap, PhotonRecord, Quantizer};
+use rayon::prelude::*;
 use crate::scene::SurfacePoint;
 use std::time::Instant;
 
@@ -44,6 +45,31 @@ impl Maps {
             full,
             primary,
             build_s,
+            build_primary_s,
+        }
+    }
+}
+
+impl Maps {
+    /// Both kd-trees from a trace's compact photons, without decoding them:
+    /// the full map is built in place over `photons`, the primary map over a
+    /// copy of the depth-0 photons.
+    pub fn from_photons(photons: Vec<CompactPhoton>, frame: Quantizer) -> Self {
+        let t = Instant::now();
+        let primary: Vec<CompactPhoton> = photons
+            .par_iter()
+            .with_min_len(4096)
+            .filter(|p| p.depth() == 0)
+            .copied()
+            .collect();
+        let primary = PhotonMap::from_compact(primary, frame);
+        let build_primary_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let full = PhotonMap::from_compact(photons, frame);
+        Maps {
+            full,
+            primary,
+            build_s: t.elapsed().as_secs_f64(),
             build_primary_s,
         }
     }

@@ -7,23 +7,26 @@
 //!
 //! let scene = Scene::cornell()?;
 //! let device = Device::new()?;
-//! let rt = scene.commit(&device)?;
-//! let mut tracer = Tracer::new(&scene, &rt);
+//! // The scene and its Embree geometry, owned together: a 'static tracer.
+//! let tracer = Tracer::new(scene.commit(&device)?);
 //! let run = tracer.trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000)))?;
 //! println!("{} photons stored", run.report.stored);
 //! # Ok::<(), adaptive_pm::Error>(())
 //! ```
 
 pub mod albedo;
+mod buffer;
 pub mod config;
 pub mod counts;
 mod density_control;
 pub mod measure;
 pub mod report;
+pub mod stream;
 pub mod tracer;
 pub mod wave;
 
-pub use config::{Budget, DensityTarget, Mode, TraceConfig};
+pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig};
 pub use measure::{measure, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};
+pub use buffer::{map_frame, POWER_HEADROOM};
 pub use tracer::{Progress, TraceOutput, Tracer};

@@ -3,7 +3,6 @@
 
 use super::config::Mode;
 use super::counts::LightPlan;
-use crate::photon_map::PhotonRecord;
 
 /// Counters of one bounce depth (depth 0 = the photons leaving the lights).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -60,6 +59,8 @@ pub struct TraceReport {
     /// Rays cast per second of the whole trace, in millions: the tracer's
     /// throughput, shading and storage included.
     pub mrays_per_s: f64,
+    /// The same in rays per second.
+    pub rays_per_s: f64,
     /// Wall time of the whole trace.
     pub trace_s: f64,
     /// Wall time of wave 0 (emission and first hits): the primary map's trace.
@@ -85,6 +86,7 @@ impl TraceReport {
             stored_power: [0.0; 3],
             rays: 0,
             mrays_per_s: 0.0,
+            rays_per_s: 0.0,
             trace_s: 0.0,
             trace_primary_s: 0.0,
         }
@@ -97,21 +99,23 @@ impl TraceReport {
         &mut self.depths[depth]
     }
 
-    pub(super) fn finish(&mut self, records: &[PhotonRecord]) {
-        self.stored = records.len() as u64;
+    /// Totals from the stored photons' exact per-depth power sums
+    /// (`Quantizer::power_sums`: count and RGB power by depth).
+    pub(super) fn finish(&mut self, by_depth: &[(u64, [f64; 3])]) {
         let mut power = [0.0f64; 3];
         for d in &mut self.depths {
             d.stored = 0;
             d.stored_power_luminance = 0.0;
         }
-        for r in records {
-            power[0] += r.power.x as f64;
-            power[1] += r.power.y as f64;
-            power[2] += r.power.z as f64;
-            let d = self.depth_mut(r.depth as usize);
-            d.stored += 1;
-            d.stored_power_luminance += crate::sampling::luminance(r.power) as f64;
+        for (depth, &(n, p)) in by_depth.iter().enumerate() {
+            for c in 0..3 {
+                power[c] += p[c];
+            }
+            let d = self.depth_mut(depth);
+            d.stored = n;
+            d.stored_power_luminance = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
         }
+        self.stored = by_depth.iter().map(|d| d.0).sum();
         self.stored_power = power;
         self.stored_primary = self.depths.first().map_or(0, |d| d.stored);
         self.reemitted_first_hit = self.depths.first().map_or(0, |d| d.children);
@@ -119,7 +123,8 @@ impl TraceReport {
         self.trace_primary_s = self.depths.first().map_or(0.0, |d| d.seconds);
         self.rays = self.depths.iter().map(|d| d.hits + d.escaped).sum();
         if self.trace_s > 0.0 {
-            self.mrays_per_s = self.rays as f64 / self.trace_s / 1e6;
+            self.rays_per_s = self.rays as f64 / self.trace_s;
+            self.mrays_per_s = self.rays_per_s / 1e6;
         }
         self.split_rate_by_depth = self
             .depths

@@ -2,21 +2,21 @@
 //! queue is empty or the depth limit is reached.
 
 use super::albedo::AlbedoTable;
-use super::config::{available_memory, DensityTarget, Mode, TraceConfig, DENSITY_CONTROL_K};
-use super::counts::{photon_power, plan_emission, LightPlan};
+use super::config::{CheckedConfig, DensityTarget, Mode, TraceConfig, DENSITY_CONTROL_K};
+use super::counts::{plan_emission, LightPlan};
 use super::density_control::DensityControl;
 use super::report::TraceReport;
-use super::wave::{shade_batch, BatchOut, PathState, ShadeContext};
+use super::stream::Schedule;
+use super::buffer::{map_frame, trace_wave};
+use super::wave::{PathState, ShadeContext};
 use crate::analysis::{AnalysisCache, DirectionalityTable};
-use crate::embree::CommittedScene;
+use crate::raycast::RayCaster;
 use crate::error::{Error, Result};
-use crate::photon_map::PhotonRecord;
-use crate::rng::{hash2, Rng};
+use crate::photon_map::{CompactPhoton, PhotonMap, PhotonRecord, Quantizer};
 use crate::sampling::luminance;
-use crate::scene::Scene;
+use crate::scene::{PreparedScene, Scene};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
 
 /// An upper bound of the children a wave can make: the sum over its photons of
@@ -61,66 +61,124 @@ fn material_tables(
     Ok(tables)
 }
 
-/// Bytes one photon costs while a run is under way: its record, its queue
-/// entry, and its compact copy in the final map. Used to turn the memory
-/// budget into a photon count before anything is allocated.
-pub const BYTES_PER_PHOTON_IN_FLIGHT: u64 =
-    (std::mem::size_of::<PhotonRecord>() + std::mem::size_of::<PathState>() + 16) as u64;
+/// Bytes a stored photon costs: it is written once, compact, into the map
+/// buffer, and the kd-tree is built in place over it. The budget is this
+/// times the photons stored plus the pending paths (bounded by the waves);
+/// `Error::Budget` when the emitted photons alone would not fit.
+pub const BYTES_PER_STORED_PHOTON: u64 = std::mem::size_of::<CompactPhoton>() as u64;
 
 /// Progress of a run, for a progress bar.
 #[derive(Clone, Copy, Debug)]
 pub struct Progress {
     /// Bounce depth of the wave under way (0 = photons leaving the lights).
     pub depth: u32,
-    /// Photons of this wave traced so far.
+    /// Photons emitted so far (waves are streamed depth by depth).
     pub done: u64,
-    /// Photons in this wave.
+    /// Photons the run emits.
     pub total: u64,
 }
 
 /// The photons of a run and what it counted.
 #[derive(Clone, Debug)]
 pub struct TraceOutput {
-    /// Every stored photon, tagged with its depth, in a deterministic order.
-    pub records: Vec<PhotonRecord>,
+    /// Every stored photon, compact, in `frame` (in an order that depends on
+    /// the batch size; the kd-tree built over them does not).
+    pub photons: Vec<CompactPhoton>,
+    /// The frame the photons are encoded in ([`map_frame`]).
+    pub frame: Quantizer,
     /// Counts and timings.
     pub report: TraceReport,
     /// Per-light emission.
     pub plans: Vec<LightPlan>,
 }
 
-/// Traces photons through one scene; keeps the directionality analyses
-/// between runs (each emission profile and BRDF is analysed once).
-#[derive(Debug)]
-pub struct Tracer<'s> {
-    scene: &'s Scene,
-    rt: &'s CommittedScene,
-    cache: Option<AnalysisCache>,
+impl TraceOutput {
+    /// The stored photons, decoded (positions and powers as quantised).
+    pub fn records(&self) -> Vec<PhotonRecord> {
+        self.photons
+            .par_iter()
+            .with_min_len(4096)
+            .map(|p| self.frame.decode(p))
+            .collect()
+    }
+
+    /// The photon map of every stored photon, built in place (no copy).
+    pub fn into_map(self) -> PhotonMap {
+        PhotonMap::from_compact(self.photons, self.frame)
+    }
 }
 
-impl<'s> Tracer<'s> {
-    /// A tracer for `scene`, whose Embree geometry is `rt` (from [`Scene::commit`]).
-    pub fn new(scene: &'s Scene, rt: &'s CommittedScene) -> Self {
+/// Traces photons through one prepared scene (a [`Scene`] and the
+/// [`RayCaster`] built from it); keeps the directionality analyses between
+/// runs (each emission profile and BRDF is analysed once).
+///
+/// A tracer owns what it needs (`'static` when the caster is): store it in
+/// your own struct, share it between threads (`trace` takes `&self`; runs
+/// on several threads at once share the analysis cache).
+pub struct Tracer<C> {
+    prepared: Arc<PreparedScene<C>>,
+    cache: Mutex<Option<AnalysisCache>>,
+}
+
+impl<C> std::fmt::Debug for Tracer<C> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Tracer")
+            .field("meshes", &self.prepared.scene().meshes.len())
+            .field("lights", &self.prepared.scene().lights.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<C: RayCaster> Tracer<C> {
+    /// A tracer for a prepared scene (from [`Scene::commit`] with Embree, or
+    /// [`PreparedScene::new`] with a caster of your own); pass it by value or
+    /// as an `Arc` to share it.
+    pub fn new(prepared: impl Into<Arc<PreparedScene<C>>>) -> Self {
         Tracer {
-            scene,
-            rt,
-            cache: None,
+            prepared: prepared.into(),
+            cache: Mutex::new(None),
         }
     }
 
-    /// The analyses done so far (`None` before the first run).
-    pub fn analysis_cache(&self) -> Option<&AnalysisCache> {
-        self.cache.as_ref()
+    /// Starts from analyses done before (by another tracer, or loaded): runs
+    /// whose analysis settings match it reuse them.
+    pub fn with_cache(self, cache: AnalysisCache) -> Self {
+        Tracer {
+            cache: Mutex::new(Some(cache)),
+            ..self
+        }
+    }
+
+    /// The scene traced.
+    pub fn scene(&self) -> &Scene {
+        self.prepared.scene()
+    }
+
+    /// The prepared scene (scene and caster).
+    pub fn prepared(&self) -> &Arc<PreparedScene<C>> {
+        &self.prepared
+    }
+
+    /// A copy of the analyses done so far (`None` before the first run).
+    pub fn analysis_cache(&self) -> Option<AnalysisCache> {
+        self.lock_cache().clone()
+    }
+
+    fn lock_cache(&self) -> std::sync::MutexGuard<'_, Option<AnalysisCache>> {
+        // A panic while analysing leaves a cache that is still consistent
+        // (entries are inserted whole), so a poisoned lock is taken as is.
+        self.cache.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
     /// Traces one run on the current rayon pool.
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for bad settings, [`Error::InvalidScene`] for a
-    /// scene without light, [`Error::Budget`] when the emitted photons alone
-    /// would not fit in the memory budget (Q = 1 on any real machine).
-    pub fn trace(&mut self, cfg: &TraceConfig) -> Result<TraceOutput> {
-        self.trace_with_progress(cfg, &|_| {})
+    /// scene without light or a hit on a material the scene does not have,
+    /// [`Error::Budget`] when the emitted photons alone would not fit in the
+    /// memory budget (Q = 1 on any real machine).
+    pub fn trace(&self, cfg: &TraceConfig) -> Result<TraceOutput> {
+        self.trace_checked(&cfg.check()?, &|_| {})
     }
 
     /// [`Tracer::trace`] with a progress callback, called from worker threads.
@@ -128,87 +186,115 @@ impl<'s> Tracer<'s> {
     /// # Errors
     /// As [`Tracer::trace`].
     pub fn trace_with_progress(
-        &mut self,
+        &self,
         cfg: &TraceConfig,
         progress: &(dyn Fn(Progress) + Sync),
     ) -> Result<TraceOutput> {
-        cfg.validate()?;
-        self.scene.validate()?;
-        let stale = self
-            .cache
+        self.trace_checked(&cfg.check()?, progress)
+    }
+
+    /// Emission plans and the alpha_D tables of the run, from the cache
+    /// (held only while analysing).
+    fn analyse(
+        &self,
+        cfg: &CheckedConfig,
+    ) -> Result<(Vec<LightPlan>, Vec<Option<Arc<DirectionalityTable>>>)> {
+        let mut guard = self.lock_cache();
+        let stale = guard
             .as_ref()
-            .is_none_or(|c| c.params() != &cfg.analysis || c.estimator() != cfg.estimator);
+            .is_none_or(|c| c.params() != cfg.analysis() || c.estimator() != cfg.estimator());
         if stale {
-            self.cache = Some(AnalysisCache::new(cfg.analysis, cfg.estimator)?);
+            *guard = Some(AnalysisCache::new(*cfg.analysis(), cfg.estimator())?);
         }
-        let Some(cache) = self.cache.as_mut() else {
+        let Some(cache) = guard.as_mut() else {
             unreachable!("set just above")
         };
-        let n_max = cfg.budget.n_max()?;
-        let plans = plan_emission(self.scene, cfg.mode, n_max, cache)?;
+        let plans = plan_emission(self.scene(), cfg.mode(), cfg.n_max(), cache)?;
+        let tables = material_tables(self.scene(), cache, cfg.mode())?;
+        Ok((plans, tables))
+    }
+
+    /// [`Tracer::trace_with_progress`] with settings checked beforehand.
+    ///
+    /// # Errors
+    /// As [`Tracer::trace`].
+    pub fn trace_checked(
+        &self,
+        cfg: &CheckedConfig,
+        progress: &(dyn Fn(Progress) + Sync),
+    ) -> Result<TraceOutput> {
+        let scene = self.prepared.scene();
+        scene.validate()?;
+        let (plans, tables) = self.analyse(cfg)?;
+        let n_max = cfg.n_max();
         let emitted: u64 = plans.iter().map(|p| p.photons).sum();
-        let budget_bytes = cfg.memory_budget.unwrap_or_else(|| available_memory() / 2);
-        let max_photons = budget_bytes / BYTES_PER_PHOTON_IN_FLIGHT;
+        let budget_bytes = cfg.memory_budget();
+        let max_photons = budget_bytes / BYTES_PER_STORED_PHOTON;
         if emitted > max_photons {
             return Err(Error::Budget {
                 photons: emitted,
-                needed_bytes: emitted.saturating_mul(BYTES_PER_PHOTON_IN_FLIGHT),
+                needed_bytes: emitted.saturating_mul(BYTES_PER_STORED_PHOTON),
                 budget_bytes,
             });
         }
-        let tables = material_tables(self.scene, cache, cfg.mode)?;
-        let albedo: Vec<AlbedoTable> = self
-            .scene
+        let albedo: Vec<AlbedoTable> = scene
             .materials
             .iter()
             .map(|m| AlbedoTable::new(&m.brdf))
             .collect();
-        let (lo, hi) = self.scene.bounds();
+        let (lo, hi) = scene.bounds();
         let epsilon = 1e-5 * (hi - lo).length().max(1e-3);
-        let max_light_luminance = self
-            .scene
+        let max_light_luminance = scene
             .lights
             .iter()
             .map(|l| luminance(l.power()))
             .fold(0.0f32, f32::max);
 
-        let mut report = TraceReport::new(cfg.mode, n_max, &plans);
+        let mut report = TraceReport::new(cfg.mode(), n_max, &plans);
+        let frame = map_frame(scene, &plans);
         let start = Instant::now();
-        let mut queue = self.emit(cfg, &plans, epsilon);
-        // Room for what a diffuse scene typically stores (about 3 hits per
-        // emitted photon), so the first waves do not copy the array as it grows.
-        let mut records: Vec<PhotonRecord> =
-            Vec::with_capacity((emitted.saturating_mul(3)).min(max_photons) as usize);
-        let mut density = match cfg.mode {
+        let mut density = match cfg.mode() {
             Mode::Density if emitted > 0 => {
-                let target = match cfg.density_target {
+                let target = match cfg.density_target() {
                     DensityTarget::PerArea(d) => d,
                     DensityTarget::Auto => {
-                        n_max as f64
-                            / self
-                                .scene
-                                .surface_sampler()
-                                .total_area()
-                                .max(f64::MIN_POSITIVE)
+                        n_max as f64 / scene.surface_sampler().total_area().max(f64::MIN_POSITIVE)
                     }
                 };
                 Some(DensityControl::new(
-                    self.scene.bounds(),
+                    scene.bounds(),
                     target,
                     DENSITY_CONTROL_K,
                 )?)
             }
             _ => None,
         };
-        let mut splitting = cfg.mode == Mode::Adaptive;
-        for depth in 0..=cfg.max_depth {
-            if queue.is_empty() {
-                break;
-            }
+        // The map buffer: reserved once for the most photons the run can
+        // store (address space only: pages are touched as photons arrive),
+        // so it never moves or copies while it fills.
+        let most = match cfg.mode() {
+            Mode::Adaptive => max_photons,
+            _ => emitted.saturating_mul(cfg.max_depth() as u64 + 1).min(max_photons),
+        };
+        let mut photons: Vec<CompactPhoton> = Vec::with_capacity(if density.is_some() {
+            0
+        } else {
+            most as usize
+        });
+        let mut schedule = Schedule::new(emitted, cfg.max_depth(), density.is_some());
+        let mut wave: Vec<PathState> = Vec::new();
+        let mut splitting = cfg.mode() == Mode::Adaptive;
+        // What the run holds, in stored photons' worth of memory: the buffer
+        // and the pending paths (a path is three photons' worth).
+        let path_cost = (std::mem::size_of::<PathState>() / BYTES_PER_STORED_PHOTON as usize) as u64;
+        while let Some(depth) = schedule.next_wave(scene, &plans, cfg.seed(), epsilon, &mut wave) {
             let wave_start = Instant::now();
-            // Splitting stops once the photons so far fill half the budget; the
-            // rest of the run is then classic Russian roulette.
-            if splitting && (records.len() + queue.len()) as u64 * 2 > max_photons {
+            let held = |photons: usize, pending: usize| photons as u64 + pending as u64 * path_cost;
+            let stored_so_far = photons.len() + density.as_ref().map_or(0, |d| d.counts().0 as usize);
+            let used = held(stored_so_far, schedule.pending_len() + wave.len());
+            // Splitting stops once the run holds half the budget; the rest
+            // of the run is then classic Russian roulette.
+            if splitting && used * 2 > max_photons {
                 splitting = false;
                 report.budget_bound = true;
             }
@@ -216,111 +302,90 @@ impl<'s> Tracer<'s> {
             // too, or one wave of splitting alone could exhaust memory (a
             // sharp light at a high Q: few photons, each split many times).
             // `s <= alpha_E(photon) N_MAX` (alpha_D <= 1), so the sum of that
-            // bound over the queue caps the children; when it exceeds the
+            // bound over the wave caps the children; when it exceeds the
             // room left, every `s` of this wave is scaled down to fit.
             let mut split_scale = 1.0;
             if splitting {
-                let room =
-                    (max_photons / 2).saturating_sub((records.len() + queue.len()) as u64) as f64;
-                let bound = split_bound(&queue, max_light_luminance, n_max, cfg.split_cap);
+                let room = ((max_photons / 2).saturating_sub(used) / (path_cost + 1)) as f64;
+                let bound = split_bound(&wave, max_light_luminance, n_max, cfg.split_cap());
                 if bound > room {
                     split_scale = room / bound;
                     report.budget_bound = true;
                 }
             }
+            // Every photon of the wave may store once: stop before the
+            // buffer could overflow.
+            if density.is_none() && photons.len() + wave.len() > photons.capacity() {
+                report.budget_bound = true;
+                break;
+            }
             let ctx = ShadeContext {
-                scene: self.scene,
-                rt: self.rt,
+                scene,
+                caster: self.prepared.caster(),
                 tables: &tables,
                 albedo: &albedo,
-                alpha_min: cfg.analysis.alpha_min,
+                alpha_min: cfg.analysis().alpha_min,
                 max_light_luminance,
                 n_max_refl: if splitting {
                     n_max as f64 * split_scale
                 } else {
                     0.0
                 },
-                split_cap: cfg.split_cap,
-                continue_paths: depth < cfg.max_depth,
-                keep_normals: cfg.mode == Mode::Density,
+                split_cap: cfg.split_cap(),
+                continue_paths: depth < cfg.max_depth() as usize,
+                keep_records: density.is_some(),
+                frame,
                 epsilon,
                 depth: depth as u8,
             };
-            let done = AtomicU64::new(0);
-            let total = queue.len() as u64;
-            let outs: Vec<BatchOut> = queue
-                .par_chunks(cfg.batch)
-                .map(|batch| {
-                    let out = shade_batch(&ctx, batch);
-                    let d =
-                        done.fetch_add(batch.len() as u64, Ordering::Relaxed) + batch.len() as u64;
-                    progress(Progress {
-                        depth,
-                        done: d,
-                        total,
-                    });
-                    out
-                })
-                .collect();
-            drop(queue);
-            let stored_here: usize = outs.iter().map(|o| o.stored.len()).sum();
-            if (records.len() + stored_here) as u64 > max_photons {
-                report.budget_bound = true;
-                break;
+            let outs = trace_wave(&ctx, &wave, &mut photons, cfg.batch(), density.is_some());
+            if let Some(m) = outs.iter().find_map(|o| o.bad_material) {
+                return Err(Error::InvalidScene(format!(
+                    "the ray caster reported a hit on material {m}, but the scene has {} materials",
+                    scene.materials.len()
+                )));
             }
-            let mut next: Vec<PathState> =
-                Vec::with_capacity(outs.iter().map(|o| o.children.len()).sum());
-
-            let stats = report.depth_mut(depth as usize);
+            let stats = report.depth_mut(depth);
             for out in outs {
                 stats.hits += out.hits;
                 stats.escaped += out.escaped;
                 stats.capped += out.capped;
                 stats.children += out.children.len() as u64;
-                match &mut density {
-                    Some(dc) => dc.offer(&out.stored, &out.normals),
-                    None => records.extend_from_slice(&out.stored),
+                if let Some(dc) = &mut density {
+                    dc.offer(&out.records, &out.normals);
                 }
-                next.extend_from_slice(&out.children);
+                schedule.pending[depth + 1].extend_from_slice(&out.children);
             }
-            stats.seconds = wave_start.elapsed().as_secs_f64();
-            queue = next;
+            stats.seconds += wave_start.elapsed().as_secs_f64();
+            progress(Progress {
+                depth: depth as u32,
+                done: schedule.emitted_so_far(),
+                total: emitted,
+            });
         }
         if let Some(dc) = density {
             let (accepted, rejected) = dc.counts();
             report.density_rejected = rejected;
             report.density_accepted = accepted;
-            records = dc.into_records();
+            let records = dc.into_records();
+            photons = records
+                .par_iter()
+                .with_min_len(4096)
+                .filter(|r| r.position.is_finite() && r.power.is_finite())
+                .map(|r| frame.encode(r))
+                .collect();
         }
+        // Give back the reserved room never used (a large buffer shrinks in
+        // place: glibc's realloc of an mmap'd block is an mremap, no copy).
+        photons.shrink_to_fit();
         report.trace_s = start.elapsed().as_secs_f64();
-        report.finish(&records);
+        report.finish(&frame.power_sums(&photons));
         Ok(TraceOutput {
-            records,
+            photons,
+            frame,
             report,
             plans,
         })
     }
-
-    /// Wave 0: every light's photons, photon `i` of light `l` keyed by (seed, l, i).
-    fn emit(&self, cfg: &TraceConfig, plans: &[LightPlan], epsilon: f32) -> Vec<PathState> {
-        let total: u64 = plans.iter().map(|p| p.photons).sum();
-        let mut queue = Vec::with_capacity(total as usize);
-        for (l, (light, plan)) in self.scene.lights.iter().zip(plans).enumerate() {
-            let power = photon_power(light, plan);
-            let light_key = hash2(cfg.seed, l as u64);
-            // Indexed: par_extend keeps photon i at position start + i.
-            queue.par_extend((0..plan.photons).into_par_iter().map(|i| {
-                let key = hash2(light_key, i);
-                let mut rng = Rng::new(key);
-                let e = light.sample(rng.next_f32(), rng.next_2d(), rng.next_2d());
-                PathState {
-                    origin: e.origin + e.normal.unwrap_or_default() * epsilon,
-                    direction: e.direction,
-                    power: power * e.weight,
-                    key,
-                }
-            }));
-        }
-        queue
-    }
 }
+

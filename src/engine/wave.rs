@@ -1,16 +1,19 @@
-//! One wave of the wavefront: every photon of a bounce depth, traced in
-//! parallel batches through Embree, then shaded: stored, and split or ended.
+//! One wave of the wavefront: a bounded chunk of photons of one bounce depth,
+//! traced in parallel batches through the [`RayCaster`], then shaded: stored,
+//! and split or ended.
 //!
-//! Batches are independent and their outputs are concatenated in batch order;
-//! a photon's random numbers come from its key, so a wave's result does not
-//! depend on the thread count or the batch size.
+//! A stored photon is encoded once, as a 16-byte [`CompactPhoton`], straight
+//! into the slot of the map buffer that its batch owns (a batch of `b`
+//! photons stores at most `b`); the tracer then closes the gaps in place.
+//! Density control, which redistributes power between stored photons, gets
+//! full records instead. A photon's random numbers come from its key, so a
+//! wave's result does not depend on the thread count or the batch size.
 
 use super::albedo::AlbedoTable;
 use super::counts::{expected_children, round_stochastic};
 use crate::analysis::DirectionalityTable;
-use crate::brdf::Brdf;
-use crate::embree::{CommittedScene, Hit, Ray};
-use crate::photon_map::PhotonRecord;
+use crate::raycast::{Hit, Ray, RayCaster};
+use crate::photon_map::{CompactPhoton, PhotonRecord, Quantizer};
 use crate::rng::{hash2, Rng};
 use crate::sampling::{luminance, Frame};
 use crate::scene::Scene;
@@ -31,9 +34,9 @@ pub struct PathState {
 }
 
 /// What shading needs to know about the run.
-pub(super) struct ShadeContext<'a> {
+pub(super) struct ShadeContext<'a, C> {
     pub scene: &'a Scene,
-    pub rt: &'a CommittedScene,
+    pub caster: &'a C,
     /// alpha_D tables by material (adaptive mode); `None` for delta BRDFs.
     pub tables: &'a [Option<Arc<DirectionalityTable>>],
     /// Albedo tables by material (the survival probability).
@@ -48,8 +51,11 @@ pub(super) struct ShadeContext<'a> {
     pub split_cap: u32,
     /// Whether photons at this depth may have children.
     pub continue_paths: bool,
-    /// Whether to record each stored photon's shading normal (density control).
-    pub keep_normals: bool,
+    /// Density control: stored photons go to `BatchOut::records` with their
+    /// shading normals, not into the map buffer.
+    pub keep_records: bool,
+    /// The frame photons are encoded in (the map's).
+    pub frame: Quantizer,
     /// Offset of new ray origins from surfaces.
     pub epsilon: f32,
     pub depth: u8,
@@ -58,42 +64,66 @@ pub(super) struct ShadeContext<'a> {
 /// The output of one batch.
 #[derive(Default)]
 pub(super) struct BatchOut {
-    pub stored: Vec<PhotonRecord>,
+    /// Photons written to the batch's slots of the map buffer.
+    pub stored: usize,
+    /// Density control only: the stored photons, uncompressed.
+    pub records: Vec<PhotonRecord>,
     /// The shading normal (facing the photon's arrival side) of each stored photon.
     pub normals: Vec<Vec3>,
     pub children: Vec<PathState>,
     pub hits: u64,
     pub escaped: u64,
     pub capped: u64,
+    /// A material index the scene does not have, reported by the caster.
+    pub bad_material: Option<u32>,
 }
 
-pub(super) fn shade_batch(ctx: &ShadeContext, batch: &[PathState]) -> BatchOut {
-    let rays: Vec<Ray> = batch
-        .iter()
-        .map(|p| Ray {
-            origin: p.origin,
-            dir: p.direction,
-            tnear: 0.0,
-            tfar: f32::INFINITY,
-        })
-        .collect();
-    let mut hits: Vec<Option<Hit>> = vec![None; rays.len()];
-    ctx.rt.intersect_batch(&rays, &mut hits);
+/// Per-worker buffers reused from batch to batch.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    rays: Vec<Ray>,
+    hits: Vec<Option<Hit>>,
+}
+
+/// Traces and shades `batch`; stored photons go to `slots` (one per photon
+/// of the batch, filled from the front) or, for density control, to the
+/// output's records.
+pub(super) fn shade_batch<C: RayCaster>(
+    ctx: &ShadeContext<C>,
+    batch: &[PathState],
+    slots: &mut [CompactPhoton],
+    scratch: &mut Scratch,
+) -> BatchOut {
+    scratch.rays.clear();
+    scratch.rays.extend(batch.iter().map(|p| Ray {
+        origin: p.origin,
+        dir: p.direction,
+        tnear: 0.0,
+        tfar: f32::INFINITY,
+    }));
+    scratch.hits.clear();
+    scratch.hits.resize(batch.len(), None);
+    ctx.caster.intersect_batch(&scratch.rays, &mut scratch.hits);
     let mut out = BatchOut {
-        stored: Vec::with_capacity(batch.len()),
         children: Vec::with_capacity(batch.len()),
         ..BatchOut::default()
     };
-    for (p, hit) in batch.iter().zip(&hits) {
+    for (p, hit) in batch.iter().zip(&scratch.hits) {
         match hit {
             None => out.escaped += 1,
-            Some(h) => shade_hit(ctx, p, h, &mut out),
+            Some(h) => shade_hit(ctx, p, h, slots, &mut out),
         }
     }
     out
 }
 
-fn shade_hit(ctx: &ShadeContext, p: &PathState, h: &Hit, out: &mut BatchOut) {
+fn shade_hit<C>(
+    ctx: &ShadeContext<C>,
+    p: &PathState,
+    h: &Hit,
+    slots: &mut [CompactPhoton],
+    out: &mut BatchOut,
+) {
     out.hits += 1;
     let position = p.origin + p.direction * h.t;
     // Surfaces are two-sided: shade on the side the photon arrives from.
@@ -103,16 +133,26 @@ fn shade_hit(ctx: &ShadeContext, p: &PathState, h: &Hit, out: &mut BatchOut) {
         h.ng
     };
     let material = h.material as usize;
-    let brdf: &Brdf = &ctx.scene.materials[material].brdf;
+    // A caster of the user's may report any index: an unknown one ends the
+    // run with an error (see the tracer), never a panic.
+    let Some(brdf) = ctx.scene.materials.get(material).map(|m| &m.brdf) else {
+        out.bad_material.get_or_insert(h.material);
+        return;
+    };
     if !brdf.is_delta() {
-        out.stored.push(PhotonRecord {
+        let record = PhotonRecord {
             position,
             power: p.power,
             direction: p.direction,
             depth: ctx.depth,
-        });
-        if ctx.keep_normals {
+        };
+        if ctx.keep_records {
+            out.records.push(record);
             out.normals.push(n);
+        } else if position.is_finite() && p.power.is_finite() {
+            // At most one store per photon of the batch: a slot is free.
+            slots[out.stored] = ctx.frame.encode(&record);
+            out.stored += 1;
         }
     }
     if !ctx.continue_paths {

@@ -12,8 +12,8 @@
 //! - **Same evaluation points** for every run: only the light's exponent changes
 //!   between runs, not the geometry, so the points are drawn once.
 //! - **Reuse**: one Embree device and committed scene for the whole sweep (the
-//!   geometry does not change with `n`), one [`Tracer`] per `n` (the scene it
-//!   borrows does).
+//!   geometry does not change with `n`), one [`Tracer`] per `n` over a copy of the
+//!   scene with that `n`, sharing the Embree geometry (checked to match).
 //! - **Runs in parallel, each on one thread**: the caller's pool size sets how
 //!   many workers there are; each worker takes the next `n` and runs its modes
 //!   on a one-thread pool of its own. Runs are independent, so this scales
@@ -25,12 +25,12 @@
 //!   `alpha_D(n) (n + 2) / 2` is reported for both ([`AlphaRow`]).
 
 use crate::analysis::{analyze_emitter, AnalysisParams, Estimator};
-use crate::embree::Device;
+use crate::embree::{CommittedScene, Device};
 use crate::emitter::CosN;
 use crate::engine::measure::{DENSITY_POINTS, DENSITY_POINTS_SEED};
 use crate::engine::{measure, Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer};
 use crate::error::{Error, Result};
-use crate::scene::{Scene, SurfacePoint};
+use crate::scene::{PreparedScene, Scene, SurfacePoint};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -330,15 +330,14 @@ fn alpha_rows(n_values: &[f64], params: &AnalysisParams) -> Result<Vec<AlphaRow>
 
 /// One trace, its maps and their densities.
 fn run_one(
-    tracer: &mut Tracer<'_>,
+    tracer: &Tracer<&CommittedScene>,
     cfg: &TraceConfig,
     n: f64,
     points: &[SurfacePoint],
     alpha: &AlphaRow,
 ) -> Result<RunMetrics> {
     let out = tracer.trace(cfg)?;
-    let maps = Maps::build(&out.records);
-    drop(out.records);
+    let maps = Maps::from_photons(out.photons, out.frame);
     let t = Instant::now();
     let m = measure(&maps, points);
     let measure_s = t.elapsed().as_secs_f64();
@@ -402,7 +401,7 @@ pub fn run_cornell(
 
     let mut scene = Scene::cornell()?;
     let device = Device::new()?;
-    let rt = scene.commit(&device)?;
+    let rt = scene.embree_geometry(&device)?;
     let points = scene
         .surface_sampler()
         .points(DENSITY_POINTS, DENSITY_POINTS_SEED);
@@ -442,7 +441,7 @@ pub fn run_cornell(
     scene.set_cosn(CosN::new(0.0)?);
     let reference = one_thread.install(|| {
         run_one(
-            &mut Tracer::new(&scene, &rt),
+            &Tracer::new(PreparedScene::new(scene.clone(), &rt)?),
             &cfg.trace_config(Mode::Classic),
             0.0,
             &points,
@@ -466,7 +465,7 @@ pub fn run_cornell(
     // Every run at one n, in mode order, on the calling thread's pool.
     let runs_at = |scene: &mut Scene, n: f64, a: &AlphaRow| -> Result<Vec<RunMetrics>> {
         scene.set_cosn(CosN::new(n as f32)?);
-        let mut tracer = Tracer::new(scene, &rt);
+        let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt)?);
         let mut out = Vec::with_capacity(cfg.modes.len());
         for &mode in &cfg.modes {
             if mode == Mode::Classic && n == 0.0 {
@@ -477,7 +476,7 @@ pub fn run_cornell(
                 Mode::Density => density_cfg.clone(),
                 m => cfg.trace_config(m),
             };
-            out.push(run_one(&mut tracer, &tc, n, &points, a)?);
+            out.push(run_one(&tracer, &tc, n, &points, a)?);
             progress(SweepProgress {
                 done: done.fetch_add(1, Ordering::Relaxed) + 1,
                 total,

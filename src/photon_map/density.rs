@@ -83,6 +83,29 @@ pub fn density_stats(map: &PhotonMap, points: &[(Vec3, Vec3)], k: usize) -> Dens
     summarize(&densities)
 }
 
+/// [`density_stats`] counting only the photons `accept` keeps (any side):
+/// for instance the primary photons of a full map, `|p| p.depth() == 0`,
+/// which gives the primary map's statistics without building it.
+pub fn density_stats_where<F>(map: &PhotonMap, points: &[Vec3], k: usize, accept: F) -> DensityStats
+where
+    F: Fn(&crate::photon_map::CompactPhoton) -> bool + Sync,
+{
+    let step = map.quantizer().step();
+    let densities: Vec<f64> = points
+        .par_iter()
+        .map_init(Vec::new, |scratch, &p| {
+            map.nearest_k_where(p, k, f32::INFINITY, scratch, &accept);
+            scratch.last().map_or(0.0, |last| {
+                let r2 = (last.dist2 as f64).max(step * step);
+                // As `density_at` computes it, so the values match a map
+                // built from the accepted photons alone.
+                (scratch.len() as f64 / (PI * r2)) as f32 as f64
+            })
+        })
+        .collect();
+    summarize(&densities)
+}
+
 /// Max, mean and population standard deviation (two passes, in order).
 fn summarize(values: &[f64]) -> DensityStats {
     if values.is_empty() {

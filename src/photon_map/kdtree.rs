@@ -112,6 +112,33 @@ impl PhotonMap {
         }
     }
 
+    /// Builds the map in place over photons already encoded in `quant` (the
+    /// tracer writes them so): no copy, the peak memory is `photons` itself.
+    /// The tree depends only on the multiset of photons, as for
+    /// [`PhotonMap::build`].
+    ///
+    /// # Panics
+    /// If there are more than `u32::MAX` photons.
+    pub fn from_compact(mut photons: Vec<CompactPhoton>, quant: Quantizer) -> PhotonMap {
+        assert!(
+            photons.len() <= u32::MAX as usize,
+            "a photon map holds at most u32::MAX photons"
+        );
+        // Split axes of an earlier build would make equal photons differ.
+        photons.par_iter_mut().with_min_len(4096).for_each(|p| p.set_axis(0));
+        build_subtree(&mut photons);
+        PhotonMap {
+            photons,
+            quant,
+            skipped: 0,
+        }
+    }
+
+    /// The photons back, in tree order, with their frame.
+    pub fn into_compact(self) -> (Vec<CompactPhoton>, Quantizer) {
+        (self.photons, self.quant)
+    }
+
     /// Number of photons.
     pub fn len(&self) -> usize {
         self.photons.len()

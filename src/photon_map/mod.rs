@@ -19,7 +19,10 @@ pub mod kdtree;
 pub mod photon;
 pub mod query;
 
-pub use density::{density_at, density_at_facing, density_stats, DensityStats, DEFAULT_DENSITY_K};
+pub use density::{
+    density_at, density_at_facing, density_stats, density_stats_where, DensityStats,
+    DEFAULT_DENSITY_K,
+};
 pub use grid::GrowingMap;
 pub use kdtree::PhotonMap;
 pub use photon::{CompactPhoton, Quantizer};

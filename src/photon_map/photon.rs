@@ -315,6 +315,49 @@ impl Quantizer {
         )
     }
 
+    /// The exact sum of the decoded powers of `photons`, per bounce depth
+    /// (index = depth) and channel, with the photon count of each depth. The
+    /// stored powers are integers times `2^(E - 39)`, so they are summed as
+    /// integers: the result does not depend on the order or the thread count.
+    pub fn power_sums(&self, photons: &[CompactPhoton]) -> Vec<(u64, [f64; 3])> {
+        const DEPTHS: usize = MAX_DEPTH as usize + 1;
+        let empty = || vec![(0u64, [0u128; 3]); DEPTHS];
+        let add = |mut a: Vec<(u64, [u128; 3])>, b: Vec<(u64, [u128; 3])>| {
+            for (x, y) in a.iter_mut().zip(b) {
+                x.0 += y.0;
+                for c in 0..3 {
+                    x.1[c] += y.1[c];
+                }
+            }
+            a
+        };
+        use rayon::prelude::*;
+        let sums = photons
+            .par_chunks(1 << 16)
+            .map(|chunk| {
+                let mut acc = empty();
+                for p in chunk {
+                    let e = &mut acc[p.depth() as usize];
+                    e.0 += 1;
+                    let exp = p.power >> 27;
+                    for c in 0..3 {
+                        e.1[c] += (((p.power >> (9 * c)) & 511) as u128) << exp;
+                    }
+                }
+                acc
+            })
+            .reduce(empty, add);
+        let unit = exp2(-POWER_BIAS) * self.power_scale;
+        let mut out: Vec<(u64, [f64; 3])> = sums
+            .into_iter()
+            .map(|(n, s)| (n, s.map(|v| v as f64 * unit)))
+            .collect();
+        while out.last().is_some_and(|d| d.0 == 0) {
+            out.pop();
+        }
+        out
+    }
+
     /// Decoded power.
     pub fn power(&self, p: &CompactPhoton) -> Vec3 {
         let exp = (p.power >> 27) as i32;

@@ -6,12 +6,12 @@
 //! use adaptive_pm::embree::Device;
 //! use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 //! use adaptive_pm::render::{render, RenderConfig, RenderMaps};
-//! use adaptive_pm::scene::Scene;
+//! use adaptive_pm::scene::{PreparedScene, Scene};
 //!
 //! let scene = Scene::cornell()?;
 //! let device = Device::new()?;
-//! let rt = scene.commit(&device)?;
-//! let run = Tracer::new(&scene, &rt).trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000)))?;
+//! let rt = scene.embree_geometry(&device)?;
+//! let run = Tracer::new(PreparedScene::new(scene.clone(), &rt)?).trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000)))?;
 //! let maps = RenderMaps::build(&run.records);
 //! let cfg = RenderConfig::new(64, 64);
 //! let image = render(&scene, &rt, Some(&maps), &cfg, &|_, _| {})?;

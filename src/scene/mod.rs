@@ -13,14 +13,14 @@ mod gltf_buffers;
 #[cfg(feature = "gltf")]
 mod gltf_load;
 mod light;
+mod prepared;
 mod surface;
 
 pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
+pub use prepared::PreparedScene;
 pub use surface::{SurfacePoint, SurfaceSampler};
 
 use crate::brdf::Brdf;
-#[cfg(feature = "embree")]
-use crate::embree::{CommittedScene, Device};
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::Vec3;
@@ -298,19 +298,8 @@ impl Scene {
         Ok(())
     }
 
-    /// Hands the geometry to Embree. A hit's `material` is the mesh's material
-    /// index and its `geom_id` the mesh index.
-    ///
-    /// # Errors
-    /// [`Error::Embree`] when Embree rejects the geometry.
-    #[cfg(feature = "embree")]
-    pub fn commit(&self, device: &Device) -> Result<CommittedScene> {
-        let mut builder = device.scene_builder()?;
-        for m in &self.meshes {
-            builder.add_triangles(&m.positions, &m.indices, m.material as u32)?;
-        }
-        builder.commit()
-    }
+    // `commit` (the scene and its Embree geometry, owned together) is in
+    // src/embree/commit.rs: Embree-specific code stays in src/embree/.
 
     /// An area-uniform sampler over every triangle of the scene.
     pub fn surface_sampler(&self) -> SurfaceSampler {

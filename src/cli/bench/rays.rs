@@ -38,7 +38,7 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
     }
     let scene = Scene::open(&args.scene)?;
     let device = Device::new()?;
-    let rt = scene.commit(&device)?;
+    let rt = scene.embree_geometry(&device)?;
     let (lo, hi) = scene.bounds();
     let eps = 1e-5 * (hi - lo).length();
     let rays = scene

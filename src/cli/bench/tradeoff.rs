@@ -31,7 +31,7 @@ use adaptive_pm::render::{
     floor_points, irradiance_estimate, quadrature_irradiance, relative_rmse, render, rmse, Image,
     Lookup, RenderConfig, RenderMaps, View,
 };
-use adaptive_pm::scene::{Scene, SurfacePoint};
+use adaptive_pm::scene::{PreparedScene, Scene, SurfacePoint};
 use anyhow::Context;
 use plotters::prelude::*;
 use serde_json::json;
@@ -144,11 +144,11 @@ fn trace(
     let mut cfg = TraceConfig::new(mode, Budget::NMax(n_max));
     cfg.seed = seed;
     let t = Instant::now();
-    let out = Tracer::new(scene, rt).trace(&cfg)?;
+    let out = Tracer::new(PreparedScene::new(scene.clone(), rt)?).trace(&cfg)?;
     let trace_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let maps = RenderMaps::build(&out.records);
-    Ok((maps, out.records.len(), trace_s, t.elapsed().as_secs_f64()))
+    let maps = RenderMaps::build(&out.records());
+    Ok((maps, out.photons.len(), trace_s, t.elapsed().as_secs_f64()))
 }
 
 fn render_cfg(args: &TradeoffArgs, spp: u32, k: usize, seed: u64, view: View) -> RenderConfig {
@@ -281,7 +281,7 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
     render_cfg(&args, args.spp, 20, 1, View::Full).validate()?;
     let pool = args.threads.pool()?;
     let device = Device::new()?;
-    let rt = scene.commit(&device)?;
+    let rt = scene.embree_geometry(&device)?;
     let pts = floor_points(&scene, "floor", 16, 16, 0.05);
     if pts.is_empty() {
         anyhow::bail!("the scene has no mesh named `floor*`: the floor irradiance needs one");

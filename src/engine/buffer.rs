@@ -1,0 +1,74 @@
+//! The map buffer a run writes into: one wave's photons encoded straight
+//! into per-batch slots at its end, the gaps closed in place, and the frame
+//! every photon of a run is encoded in.
+
+use super::counts::{photon_power, LightPlan};
+use super::wave::{shade_batch, BatchOut, PathState, Scratch, ShadeContext};
+use crate::photon_map::{CompactPhoton, Quantizer};
+use crate::raycast::RayCaster;
+use crate::scene::Scene;
+use rayon::prelude::*;
+
+/// Traces one wave: batches in parallel, each writing its stored photons to
+/// its own slots at the end of `photons`; the gaps (escaped photons, delta
+/// surfaces) are then closed in place, in batch order.
+pub(super) fn trace_wave<C: RayCaster>(
+    ctx: &ShadeContext<C>,
+    wave: &[PathState],
+    photons: &mut Vec<CompactPhoton>,
+    batch: usize,
+    records_only: bool,
+) -> Vec<BatchOut> {
+    let base = photons.len();
+    if !records_only {
+        photons.resize(base + wave.len(), CompactPhoton::default());
+    }
+    let slots = &mut photons[base..];
+    let slot_len = if records_only { 0 } else { batch };
+    let outs: Vec<BatchOut> = if records_only {
+        wave.par_chunks(batch)
+            .map_init(Scratch::default, |s, b| shade_batch(ctx, b, &mut [], s))
+            .collect()
+    } else {
+        slots
+            .par_chunks_mut(slot_len)
+            .zip(wave.par_chunks(batch))
+            .map_init(Scratch::default, |s, (slots, b)| shade_batch(ctx, b, slots, s))
+            .collect()
+    };
+    if !records_only {
+        let mut write = base;
+        for (i, o) in outs.iter().enumerate() {
+            let from = base + i * batch;
+            photons.copy_within(from..from + o.stored, write);
+            write += o.stored;
+        }
+        photons.truncate(write);
+    }
+    outs
+}
+
+/// The frame every photon of a run is encoded in, fixed before tracing so
+/// that photons are written once: positions on a grid over the scene's
+/// bounds (hits lie on its triangles), powers relative to the largest
+/// emitted photon's largest channel times [`POWER_HEADROOM`]. It depends only
+/// on the scene and the emission plan, so every shard of a run (and every
+/// thread count and batch size) encodes in the same frame, and the map's
+/// checksum (compact photons in tree order, and this frame) is the same.
+pub fn map_frame(scene: &Scene, plans: &[LightPlan]) -> Quantizer {
+    let (lo, hi) = scene.bounds();
+    let largest = scene
+        .lights
+        .iter()
+        .zip(plans)
+        .map(|(l, p)| photon_power(l, p).max_element())
+        .fold(0.0f32, f32::max);
+    Quantizer::new(lo, hi, largest * POWER_HEADROOM)
+}
+
+/// How far above the largest emitted photon a stored photon's channel may go
+/// before it is clamped: a bounce multiplies power by the BRDF weight over the
+/// survival probability, at most 1 for Lambert, rarely above a few for
+/// glossy models. Stored powers keep 9 significant bits down to
+/// `2^-31 / POWER_HEADROOM` of the largest emitted photon.
+pub const POWER_HEADROOM: f32 = 256.0;

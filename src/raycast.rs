@@ -1,0 +1,152 @@
+//! Ray casting as the photon engine sees it: a [`Ray`], the [`Hit`] it
+//! returns, and the [`RayCaster`] trait the tracer is generic over.
+//!
+//! Embree's scene ([`crate::embree::CommittedScene`]) implements the trait;
+//! a renderer with its own BVH implements it too and drives the same engine
+//! (see `examples/downstream`). Nothing here depends on Embree, so this
+//! module, the scene model and the engine's shading build without it.
+//!
+//! Contract of an implementation:
+//! - `Hit::material` indexes the [`Scene`]'s materials (an out-of-range index
+//!   makes the trace fail with [`crate::Error::InvalidScene`], never a panic);
+//! - `Hit::ng` is the unit geometric normal, on either side (surfaces are
+//!   two-sided: the engine flips it towards the incoming photon);
+//! - `Hit::t` is in units of `Ray::dir`, within `[tnear, tfar]`;
+//! - a ray that is not finite misses (and is not occluded).
+
+use crate::error::Result;
+use crate::scene::Scene;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// A ray segment `origin + t * dir`, `t` in `[tnear, tfar]`. `dir` need not
+/// be unit length; `t` is measured in units of `dir`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Start point.
+    pub origin: Vec3,
+    /// Direction (non-zero, not necessarily normalised).
+    pub dir: Vec3,
+    /// Start of the segment (>= 0).
+    pub tnear: f32,
+    /// End of the segment (>= `tnear`, may be infinite).
+    pub tfar: f32,
+}
+
+impl Ray {
+    /// An unbounded ray: `tnear = 0`, `tfar = +inf`.
+    #[inline]
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Ray {
+            origin,
+            dir,
+            tnear: 0.0,
+            tfar: f32::INFINITY,
+        }
+    }
+
+    /// The segment from `origin` towards `target`, stopping `eps` (a fraction
+    /// of the distance) short of either end: for shadow and visibility tests.
+    #[inline]
+    pub fn segment(origin: Vec3, target: Vec3, eps: f32) -> Self {
+        Ray {
+            origin,
+            dir: target - origin,
+            tnear: eps,
+            tfar: 1.0 - eps,
+        }
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.dir
+    }
+}
+
+/// The closest intersection of a ray with the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit (distance when `dir` is unit length).
+    pub t: f32,
+    /// Unit geometric normal (not flipped toward the ray).
+    pub ng: Vec3,
+    /// Geometry ID (with Embree: the mesh index of the scene).
+    pub geom_id: u32,
+    /// Triangle index within that geometry.
+    pub prim_id: u32,
+    /// Barycentric coordinate of vertex 1 (`p = (1-u-v) p0 + u p1 + v p2`).
+    pub u: f32,
+    /// Barycentric coordinate of vertex 2.
+    pub v: f32,
+    /// Index of the hit surface's material in the scene.
+    pub material: u32,
+}
+
+/// Something that finds where rays hit a scene: closest hits and occlusion,
+/// one ray at a time or in batches. Shared by every tracing thread.
+///
+/// The batch methods are what the photon engine calls (a batch of up to
+/// `TraceConfig::batch` rays at a time); their default loops over the single
+/// queries, and an implementation with packet kernels overrides them.
+pub trait RayCaster: Send + Sync {
+    /// The closest hit along `ray` in `[tnear, tfar]`, if any.
+    fn intersect(&self, ray: &Ray) -> Option<Hit>;
+
+    /// Whether anything lies along `ray` in `[tnear, tfar]`.
+    fn occluded(&self, ray: &Ray) -> bool;
+
+    /// [`intersect`](Self::intersect) for every ray; `hits` has one slot per ray
+    /// (extra slots on either side are left alone).
+    fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
+            *hit = self.intersect(ray);
+        }
+    }
+
+    /// [`occluded`](Self::occluded) for every ray.
+    fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        for (ray, o) in rays.iter().zip(out.iter_mut()) {
+            *o = self.occluded(ray);
+        }
+    }
+
+    /// Checks that this caster was built from `scene` (as far as it can
+    /// tell): called once when the two are put together in a
+    /// [`crate::scene::PreparedScene`]. The default accepts any scene.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidScene`] naming the mismatch.
+    fn check_scene(&self, scene: &Scene) -> Result<()> {
+        let _ = scene;
+        Ok(())
+    }
+}
+
+macro_rules! forward_caster {
+    ($($ty:ty),*) => {$(
+        impl<C: RayCaster + ?Sized> RayCaster for $ty {
+            #[inline]
+            fn intersect(&self, ray: &Ray) -> Option<Hit> {
+                (**self).intersect(ray)
+            }
+            #[inline]
+            fn occluded(&self, ray: &Ray) -> bool {
+                (**self).occluded(ray)
+            }
+            fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+                (**self).intersect_batch(rays, hits)
+            }
+            fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+                (**self).occluded_batch(rays, out)
+            }
+            fn check_scene(&self, scene: &Scene) -> Result<()> {
+                (**self).check_scene(scene)
+            }
+        }
+    )*};
+}
+
+// One Embree scene shared by several prepared scenes (say, the same geometry
+// with different light profiles), or a caster behind a trait object.
+forward_caster!(&C, Arc<C>, Box<C>);

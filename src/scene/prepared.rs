@@ -1,0 +1,47 @@
+//! A scene together with the ray caster built from it: what a
+//! [`crate::engine::Tracer`] traces. Owning both halves means a tracer can
+//! never be handed one scene's materials and another scene's geometry, and
+//! the pair is `'static`: cheap to put in an `Arc`, store and share.
+//!
+//! With Embree, [`Scene::commit`] makes one (see `src/embree/commit.rs`); with
+//! a caster of your own, [`PreparedScene::new`].
+
+use super::Scene;
+use crate::error::Result;
+use crate::raycast::RayCaster;
+
+/// A [`Scene`] and its ray caster `C`, checked against each other once.
+#[derive(Debug)]
+pub struct PreparedScene<C> {
+    scene: Scene,
+    caster: C,
+}
+
+impl<C: RayCaster> PreparedScene<C> {
+    /// Puts a scene and a caster built from it together.
+    ///
+    /// # Errors
+    /// What [`RayCaster::check_scene`] reports (with Embree: a geometry or
+    /// material count that does not match the scene's meshes).
+    pub fn new(scene: Scene, caster: C) -> Result<Self> {
+        caster.check_scene(&scene)?;
+        Ok(PreparedScene { scene, caster })
+    }
+}
+
+impl<C> PreparedScene<C> {
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The ray caster.
+    pub fn caster(&self) -> &C {
+        &self.caster
+    }
+
+    /// Both halves back.
+    pub fn into_parts(self) -> (Scene, C) {
+        (self.scene, self.caster)
+    }
+}

@@ -1,0 +1,120 @@
+//! The engine's ray-casting seam: a tracer that owns its scene and can be
+//! stored and shared across threads, a caster of the user's own, and the
+//! mismatches that must be errors rather than panics.
+
+use adaptive_pm::embree::{thread_pool, CommittedScene, Device};
+use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
+use adaptive_pm::raycast::{Hit, Ray, RayCaster};
+use adaptive_pm::scene::{PreparedScene, Scene};
+use adaptive_pm::Error;
+use std::sync::Arc;
+
+fn checksum(tracer: &Tracer<impl RayCaster>, cfg: &TraceConfig) -> u64 {
+    let out = tracer.trace(cfg).unwrap();
+    out.into_map().checksum()
+}
+
+/// A renderer's struct holding a tracer: compiles only if the tracer is `'static`.
+struct Renderer {
+    tracer: Arc<Tracer<CommittedScene>>,
+}
+
+#[test]
+fn a_stored_tracer_traces_from_two_threads_with_the_same_map() {
+    let device = Device::new().unwrap();
+    let r = Renderer {
+        tracer: Arc::new(Tracer::new(Scene::cornell().unwrap().commit(&device).unwrap())),
+    };
+    let cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(20_000));
+    let pool = thread_pool(1).unwrap();
+    let alone = pool.install(|| checksum(&r.tracer, &cfg));
+    let sums: Vec<u64> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..2)
+            .map(|_| {
+                let t = Arc::clone(&r.tracer);
+                let cfg = &cfg;
+                s.spawn(move || thread_pool(1).unwrap().install(|| checksum(&t, cfg)))
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert_eq!(sums, vec![alone, alone]);
+    // The analyses are handed on to a new tracer.
+    let cache = r.tracer.analysis_cache().expect("analysed");
+    let again = Tracer::new(Scene::cornell().unwrap().commit(&device).unwrap()).with_cache(cache);
+    assert_eq!(pool.install(|| checksum(&again, &cfg)), alone);
+}
+
+/// A caster of the user's: here Embree behind the trait's default (one ray
+/// at a time) batch methods, so its answers are Embree's bit for bit.
+struct OneByOne(CommittedScene);
+
+impl RayCaster for OneByOne {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.0.intersect(ray)
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.0.occluded(ray)
+    }
+}
+
+#[test]
+fn a_user_caster_drives_the_engine_to_the_same_map() {
+    let device = Device::new().unwrap();
+    let scene = Scene::cornell().unwrap();
+    let own = OneByOne(scene.embree_geometry(&device).unwrap());
+    let mine = Tracer::new(PreparedScene::new(scene.clone(), own).unwrap());
+    let embree = Tracer::new(scene.commit(&device).unwrap());
+    let pool = thread_pool(2).unwrap();
+    for mode in [Mode::Classic, Mode::Adaptive] {
+        let cfg = TraceConfig::new(mode, Budget::NMax(10_000));
+        assert_eq!(
+            pool.install(|| checksum(&mine, &cfg)),
+            pool.install(|| checksum(&embree, &cfg)),
+            "{mode:?}"
+        );
+    }
+}
+
+/// A caster that reports a material the scene does not have.
+struct BadMaterial(CommittedScene);
+
+impl RayCaster for BadMaterial {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.0.intersect(ray).map(|h| Hit { material: 42, ..h })
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.0.occluded(ray)
+    }
+}
+
+#[test]
+fn mismatches_are_errors_not_panics() {
+    let device = Device::new().unwrap();
+    let cornell = Scene::cornell().unwrap();
+    let bad = BadMaterial(cornell.embree_geometry(&device).unwrap());
+    let tracer = Tracer::new(PreparedScene::new(cornell.clone(), bad).unwrap());
+    let e = tracer
+        .trace(&TraceConfig::new(Mode::Classic, Budget::NMax(1000)))
+        .unwrap_err();
+    assert!(matches!(e, Error::InvalidScene(_)), "{e}");
+    assert!(e.to_string().contains("material 42"), "{e}");
+
+    // Another scene's Embree geometry: one mesh fewer.
+    let mut other = cornell.clone();
+    other.meshes.pop();
+    let rt = other.embree_geometry(&device).unwrap();
+    let e = PreparedScene::new(cornell.clone(), rt).unwrap_err();
+    assert!(matches!(e, Error::InvalidScene(_)), "{e}");
+    // Same mesh count, materials swapped.
+    let mut swapped = cornell.clone();
+    let a = swapped.meshes[0].material;
+    let j = (1..swapped.meshes.len())
+        .find(|&j| swapped.meshes[j].material != a)
+        .expect("the Cornell box has several materials");
+    swapped.meshes[0].material = swapped.meshes[j].material;
+    swapped.meshes[j].material = a;
+    let rt = Arc::new(swapped.embree_geometry(&device).unwrap());
+    assert!(PreparedScene::new(cornell, Arc::clone(&rt)).is_err());
+    assert!(PreparedScene::new(swapped, rt).is_ok());
+}
