@@ -72,7 +72,9 @@ fn main() {
         // compile no shim and link nothing (rustdoc does not link).
         println!("cargo::rustc-cfg=embree3");
         if let Err(e) = std::fs::copy("src/docs_rs_bindings.rs", out.join("bindings.rs")) {
-            fail(&format!("embree-sys: cannot copy the docs.rs bindings to OUT_DIR: {e}"));
+            fail(&format!(
+                "embree-sys: cannot copy the docs.rs bindings to OUT_DIR: {e}"
+            ));
         }
         return;
     }
@@ -138,7 +140,9 @@ fn main() {
         )),
     };
     if let Err(e) = bindings.write_to_file(out.join("bindings.rs")) {
-        fail(&format!("embree-sys: cannot write bindings.rs to OUT_DIR: {e}"));
+        fail(&format!(
+            "embree-sys: cannot write bindings.rs to OUT_DIR: {e}"
+        ));
     }
 }
 

@@ -231,7 +231,9 @@ fn quality_zero_is_an_empty_map_and_one_is_a_budget_error() {
     );
     assert_eq!(out.report.emitted, 0);
     assert!(out.photons.is_empty());
-    assert!(Maps::from_photons(out.photons.clone(), out.frame).full.is_empty());
+    assert!(Maps::from_photons(out.photons.clone(), out.frame)
+        .full
+        .is_empty());
 
     let device = Device::new().unwrap();
     let rt = scene.embree_geometry(&device).unwrap();

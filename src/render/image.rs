@@ -188,7 +188,6 @@ impl Image {
         let n = self.pixels.len().max(1) as f64;
         Vec3::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
     }
-
 }
 
 /// Image files: the `image-io` feature.

@@ -30,7 +30,9 @@ pub(super) fn load(
             gltf::buffer::Source::Bin => blob
                 .take()
                 .ok_or_else(|| fail(format!("buffer {i} refers to a missing GLB binary chunk")))?,
-            gltf::buffer::Source::Uri(uri) => read_uri(uri, base).map_err(|e| fail(format!("buffer {i}: {e}")))?,
+            gltf::buffer::Source::Uri(uri) => {
+                read_uri(uri, base).map_err(|e| fail(format!("buffer {i}: {e}")))?
+            }
         };
         if data.len() < buffer.length() {
             return Err(fail(format!(
@@ -51,7 +53,10 @@ fn read_uri(uri: &str, base: Option<&Path>) -> std::result::Result<Vec<u8>, Stri
         };
         return decode_base64(payload);
     }
-    let relative = if let Some(rest) = uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:")) {
+    let relative = if let Some(rest) = uri
+        .strip_prefix("file://")
+        .or_else(|| uri.strip_prefix("file:"))
+    {
         rest
     } else if uri.contains(':') {
         return Err(format!("unsupported URI scheme in `{uri}`"));
@@ -154,6 +159,9 @@ mod tests {
         assert!(read_uri("scene.bin", None).is_err());
         assert!(read_uri("https://example.com/scene.bin", Some(Path::new("."))).is_err());
         assert!(read_uri("data:application/octet-stream,abc", None).is_err());
-        assert_eq!(read_uri("data:application/octet-stream;base64,Zm9v", None).unwrap(), b"foo");
+        assert_eq!(
+            read_uri("data:application/octet-stream;base64,Zm9v", None).unwrap(),
+            b"foo"
+        );
     }
 }
