@@ -37,7 +37,9 @@ fn modes(c: &mut Criterion) {
         .points(DENSITY_POINTS, DENSITY_POINTS_SEED);
 
     let classic = TraceConfig::new(Mode::Classic, Budget::NMax(N_MAX));
-    let reference = Tracer::new(PreparedScene::new(scenes[0].clone(), &rt).unwrap()).trace(&classic).unwrap();
+    let reference = Tracer::new(PreparedScene::new(scenes[0].clone(), &rt).unwrap())
+        .trace(&classic)
+        .unwrap();
     let ref_maps = Maps::from_photons(reference.photons.clone(), reference.frame);
     let target = measure(&ref_maps, &points).full.mean;
 
@@ -68,7 +70,11 @@ fn modes(c: &mut Criterion) {
             let id = format!("{}/{n}", mode.name());
             group.throughput(Throughput::Elements(out.photons.len() as u64));
             group.bench_function(BenchmarkId::new("build", &id), |b| {
-                b.iter(|| Maps::from_photons(out.photons.clone(), out.frame).full.len())
+                b.iter(|| {
+                    Maps::from_photons(out.photons.clone(), out.frame)
+                        .full
+                        .len()
+                })
             });
             let maps = Maps::from_photons(out.photons.clone(), out.frame);
             group.throughput(Throughput::Elements(2 * points.len() as u64));

@@ -23,7 +23,9 @@ struct Renderer {
 fn a_stored_tracer_traces_from_two_threads_with_the_same_map() {
     let device = Device::new().unwrap();
     let r = Renderer {
-        tracer: Arc::new(Tracer::new(Scene::cornell().unwrap().commit(&device).unwrap())),
+        tracer: Arc::new(Tracer::new(
+            Scene::cornell().unwrap().commit(&device).unwrap(),
+        )),
     };
     let cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(20_000));
     let pool = thread_pool(1).unwrap();

@@ -22,7 +22,9 @@ fn cornell(n: f32) -> Scene {
 fn maps(scene: &Scene, rt: &CommittedScene, mode: Mode, n_max: u64, seed: u64) -> RenderMaps {
     let mut cfg = TraceConfig::new(mode, Budget::NMax(n_max));
     cfg.seed = seed;
-    let out = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap()).trace(&cfg).unwrap();
+    let out = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap())
+        .trace(&cfg)
+        .unwrap();
     RenderMaps::build(&out.records())
 }
 

@@ -3,11 +3,11 @@
 
 use super::common::{open_scene, progress_bar, BudgetArgs, ThreadArgs};
 use adaptive_pm::embree::Device;
-use adaptive_pm::scene::PreparedScene;
 use adaptive_pm::engine::{Mode, Tracer};
 use adaptive_pm::render::{
     check_output_path, render, RenderConfig, RenderMaps, ToneMap, View, DEFAULT_K,
 };
+use adaptive_pm::scene::PreparedScene;
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;

@@ -137,10 +137,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     );
     println!(
         "primary        max {:.4e}  mean {:.4e}  sigma {:.4e}  sigma/mean {:.3}",
-        primary.max,
-        primary.mean,
-        primary.sigma,
-        primary.sigma_over_mean
+        primary.max, primary.mean, primary.sigma, primary.sigma_over_mean
     );
     println!(
         "time           trace {:.3} s ({:.2} Mrays/s), kd-tree {:.3} s",

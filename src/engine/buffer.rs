@@ -33,7 +33,9 @@ pub(super) fn trace_wave<C: RayCaster>(
         slots
             .par_chunks_mut(slot_len)
             .zip(wave.par_chunks(batch))
-            .map_init(Scratch::default, |s, (slots, b)| shade_batch(ctx, b, slots, s))
+            .map_init(Scratch::default, |s, (slots, b)| {
+                shade_batch(ctx, b, slots, s)
+            })
             .collect()
     };
     if !records_only {

@@ -2,9 +2,11 @@
 //! map of primary photons (stored at their first hit), each a balanced kd-tree,
 //! and the photon density `k / (pi r_k^2)` over fixed surface points.
 
-use crate::photon_map::{density_stats, CompactPhoton, DensityStats, PhotonMap, PhotonRecord, Quantizer};
-use rayon::prelude::*;
+use crate::photon_map::{
+    density_stats, CompactPhoton, DensityStats, PhotonMap, PhotonRecord, Quantizer,
+};
 use crate::scene::SurfacePoint;
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// k of the density estimate `k / (pi r_k^2)`.

@@ -25,8 +25,8 @@ pub mod stream;
 pub mod tracer;
 pub mod wave;
 
+pub use buffer::{map_frame, POWER_HEADROOM};
 pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig};
 pub use measure::{measure, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};
-pub use buffer::{map_frame, POWER_HEADROOM};
 pub use tracer::{Progress, TraceOutput, Tracer};

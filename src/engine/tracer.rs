@@ -2,17 +2,17 @@
 //! queue is empty or the depth limit is reached.
 
 use super::albedo::AlbedoTable;
+use super::buffer::{map_frame, trace_wave};
 use super::config::{CheckedConfig, DensityTarget, Mode, TraceConfig, DENSITY_CONTROL_K};
 use super::counts::{plan_emission, LightPlan};
 use super::density_control::DensityControl;
 use super::report::TraceReport;
 use super::stream::Schedule;
-use super::buffer::{map_frame, trace_wave};
 use super::wave::{PathState, ShadeContext};
 use crate::analysis::{AnalysisCache, DirectionalityTable};
-use crate::raycast::RayCaster;
 use crate::error::{Error, Result};
 use crate::photon_map::{CompactPhoton, PhotonMap, PhotonRecord, Quantizer};
+use crate::raycast::RayCaster;
 use crate::sampling::luminance;
 use crate::scene::{PreparedScene, Scene};
 use rayon::prelude::*;
@@ -274,23 +274,24 @@ impl<C: RayCaster> Tracer<C> {
         // so it never moves or copies while it fills.
         let most = match cfg.mode() {
             Mode::Adaptive => max_photons,
-            _ => emitted.saturating_mul(cfg.max_depth() as u64 + 1).min(max_photons),
+            _ => emitted
+                .saturating_mul(cfg.max_depth() as u64 + 1)
+                .min(max_photons),
         };
-        let mut photons: Vec<CompactPhoton> = Vec::with_capacity(if density.is_some() {
-            0
-        } else {
-            most as usize
-        });
+        let mut photons: Vec<CompactPhoton> =
+            Vec::with_capacity(if density.is_some() { 0 } else { most as usize });
         let mut schedule = Schedule::new(emitted, cfg.max_depth(), density.is_some());
         let mut wave: Vec<PathState> = Vec::new();
         let mut splitting = cfg.mode() == Mode::Adaptive;
         // What the run holds, in stored photons' worth of memory: the buffer
         // and the pending paths (a path is three photons' worth).
-        let path_cost = (std::mem::size_of::<PathState>() / BYTES_PER_STORED_PHOTON as usize) as u64;
+        let path_cost =
+            (std::mem::size_of::<PathState>() / BYTES_PER_STORED_PHOTON as usize) as u64;
         while let Some(depth) = schedule.next_wave(scene, &plans, cfg.seed(), epsilon, &mut wave) {
             let wave_start = Instant::now();
             let held = |photons: usize, pending: usize| photons as u64 + pending as u64 * path_cost;
-            let stored_so_far = photons.len() + density.as_ref().map_or(0, |d| d.counts().0 as usize);
+            let stored_so_far =
+                photons.len() + density.as_ref().map_or(0, |d| d.counts().0 as usize);
             let used = held(stored_so_far, schedule.pending_len() + wave.len());
             // Splitting stops once the run holds half the budget; the rest
             // of the run is then classic Russian roulette.
@@ -388,4 +389,3 @@ impl<C: RayCaster> Tracer<C> {
         })
     }
 }
-

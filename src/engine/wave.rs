@@ -12,8 +12,8 @@
 use super::albedo::AlbedoTable;
 use super::counts::{expected_children, round_stochastic};
 use crate::analysis::DirectionalityTable;
-use crate::raycast::{Hit, Ray, RayCaster};
 use crate::photon_map::{CompactPhoton, PhotonRecord, Quantizer};
+use crate::raycast::{Hit, Ray, RayCaster};
 use crate::rng::{hash2, Rng};
 use crate::sampling::{luminance, Frame};
 use crate::scene::Scene;

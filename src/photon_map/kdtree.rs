@@ -125,7 +125,10 @@ impl PhotonMap {
             "a photon map holds at most u32::MAX photons"
         );
         // Split axes of an earlier build would make equal photons differ.
-        photons.par_iter_mut().with_min_len(4096).for_each(|p| p.set_axis(0));
+        photons
+            .par_iter_mut()
+            .with_min_len(4096)
+            .for_each(|p| p.set_axis(0));
         build_subtree(&mut photons);
         PhotonMap {
             photons,
