@@ -11,6 +11,11 @@
 //!
 //! Emits `cfg(embree4)` or `cfg(embree3)` and the metadata `version_major`,
 //! `include` (seen by dependents' build scripts as `DEP_EMBREE_*`).
+//!
+//! Where Embree (or libclang) is missing the build fails with `cargo::error`
+//! lines saying what to install, not with a panic. Under docs.rs (`DOCS_RS`
+//! set) nothing is searched, compiled or linked: the documentation is built
+//! from `src/docs_rs_bindings.rs`, bindings generated here from Embree 3.13.5.
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -43,7 +48,17 @@ Install it (Debian/Ubuntu: `apt-get install libembree-dev`; Fedora: `dnf install
 macOS: `brew install embree`) or set EMBREE_DIR to a prefix holding \
 include/embree4/rtcore.h (or include/embree3/rtcore.h) and lib/libembree4.so (or libembree3.so)";
 
+/// Stops the build with `message` shown as a Cargo error (no panic, no backtrace).
+fn fail(message: &str) -> ! {
+    for line in message.lines() {
+        println!("cargo::error={line}");
+    }
+    // `cargo::error` fails the build once the script has ended; exit cleanly.
+    std::process::exit(0)
+}
+
 fn main() {
+    println!("cargo::rerun-if-env-changed=DOCS_RS");
     println!("cargo::rerun-if-env-changed=EMBREE_DIR");
     println!("cargo::rerun-if-env-changed=PKG_CONFIG_PATH");
     println!("cargo::rerun-if-changed=shim/shim.c");
@@ -51,7 +66,24 @@ fn main() {
     println!("cargo::rustc-check-cfg=cfg(embree3)");
     println!("cargo::rustc-check-cfg=cfg(embree4)");
 
-    let embree = find_embree().unwrap_or_else(|| panic!("{HOW_TO_INSTALL}"));
+    let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    if env::var_os("DOCS_RS").is_some() {
+        // docs.rs has no Embree: document the pre-generated Embree 3 bindings,
+        // compile no shim and link nothing (rustdoc does not link).
+        println!("cargo::rustc-cfg=embree3");
+        if let Err(e) = std::fs::copy("src/docs_rs_bindings.rs", out.join("bindings.rs")) {
+            fail(&format!(
+                "embree-sys: cannot copy the docs.rs bindings to OUT_DIR: {e}"
+            ));
+        }
+        return;
+    }
+
+    let embree = match find_embree() {
+        Ok(Some(embree)) => embree,
+        Ok(None) => fail(HOW_TO_INSTALL),
+        Err(message) => fail(&message),
+    };
     let header = embree
         .include_dir
         .join(format!("embree{}", embree.major))
@@ -71,7 +103,8 @@ fn main() {
         .include(&embree.include_dir)
         .define("APM_EMBREE_MAJOR", major_define.as_str())
         .warnings(true)
-        .compile("apm_embree_shim");
+        .try_compile("apm_embree_shim")
+        .unwrap_or_else(|e| fail(&format!("embree-sys: cannot compile shim/shim.c: {e}")));
 
     if let Some(dir) = &embree.lib_dir {
         println!("cargo::rustc-link-search=native={}", dir.display());
@@ -97,33 +130,38 @@ fn main() {
         .derive_debug(true)
         .layout_tests(true)
         .parse_callbacks(Box::new(bindgen::CargoCallbacks::new()))
-        .generate()
-        .unwrap_or_else(|e| {
-            panic!(
-                "embree-sys: bindgen could not parse {} ({e}); is libclang installed \
-                 (`apt-get install libclang-dev`)?",
-                header.display()
-            )
-        });
-    let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
-    bindings
-        .write_to_file(out.join("bindings.rs"))
-        .expect("embree-sys: cannot write bindings.rs to OUT_DIR");
+        .generate();
+    let bindings = match bindings {
+        Ok(b) => b,
+        Err(e) => fail(&format!(
+            "embree-sys: bindgen could not parse {} ({e}); is libclang installed \
+             (`apt-get install libclang-dev`)?",
+            header.display()
+        )),
+    };
+    if let Err(e) = bindings.write_to_file(out.join("bindings.rs")) {
+        fail(&format!(
+            "embree-sys: cannot write bindings.rs to OUT_DIR: {e}"
+        ));
+    }
 }
 
-fn find_embree() -> Option<Embree> {
+/// The Embree to build against; `Ok(None)` when none was found, `Err` when
+/// `EMBREE_DIR` names a folder without one.
+fn find_embree() -> Result<Option<Embree>, String> {
     if let Some(dir) = env::var_os("EMBREE_DIR") {
         let dir = PathBuf::from(dir);
-        return Some(from_prefix(&dir).unwrap_or_else(|| {
-            panic!(
+        return match from_prefix(&dir) {
+            Some(embree) => Ok(Some(embree)),
+            None => Err(format!(
                 "embree-sys: EMBREE_DIR={} holds neither include/embree4/rtcore.h nor \
                  include/embree3/rtcore.h; point it at an Embree install prefix or unset it \
                  to search the system (`apt-get install libembree-dev`)",
                 dir.display()
-            )
-        }));
+            )),
+        };
     }
-    from_pkg_config().or_else(from_standard_dirs)
+    Ok(from_pkg_config().or_else(from_standard_dirs))
 }
 
 fn has_header(include_dir: &Path, major: u32) -> bool {

@@ -34,10 +34,11 @@ pub enum Error {
         /// Why it was rejected, with the value.
         reason: String,
     },
-    /// A run would store more photons than the memory budget allows.
+    /// A run would store more photons than the memory budget allows
+    /// (`TraceConfig::memory_budget`, by default a share of the machine's memory).
     #[error(
         "photon budget exceeded: {photons} photons would need {needed_bytes} bytes \
-         but the budget is {budget_bytes} bytes (raise it with --budget-mb or lower the quality)"
+         but the memory budget is {budget_bytes} bytes (raise the budget or lower the quality)"
     )]
     Budget {
         /// Photons the run asked for.

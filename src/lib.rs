@@ -6,44 +6,161 @@
 //! sets how many photons each light emits and how many a hit splits into,
 //! from the energy, area and directionality of every emitter and BRDF.
 //!
-//! ```no_run
-//! use adaptive_pm::embree::{thread_pool, Device};
-//! use adaptive_pm::engine::{Budget, Maps, Mode, TraceConfig, Tracer};
-//! use adaptive_pm::scene::Scene;
+//! # A scene built in code
 //!
-//! let scene = Scene::cornell()?; // or Scene::load("scene.glb")?
-//! let device = Device::new()?;
-//! // The scene and its Embree geometry, owned together (Send + Sync, 'static).
-//! let tracer = Tracer::new(scene.commit(&device)?);
-//! let pool = thread_pool(0)?; // rayon workers with FTZ/DAZ set for Embree
-//! let cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000));
-//! let run = pool.install(|| tracer.trace(&cfg))?;
-//! let maps = Maps::from_photons(run.photons, run.frame); // kd-trees: all, first hits
-//! let mut nearest = Vec::new();
-//! maps.full.nearest_k(glam::Vec3::new(278.0, 0.0, 279.5), 50, f32::INFINITY, &mut nearest);
+//! A grey floor under a square light that faces down (no file, no Embree):
+//!
+//! ```
+//! use adaptive_pm::prelude::*;
+//! use glam::Vec3;
+//!
+//! # fn floor_and_light() -> adaptive_pm::Result<Scene> {
+//! let mut scene = Scene::new();
+//! let grey = scene.add_material(Material {
+//!     name: "grey".into(),
+//!     brdf: Brdf::Lambert(Lambert { albedo: Vec3::splat(0.5) }),
+//!     emission: None,
+//! });
+//! let lamp = scene.add_material(Material {
+//!     name: "lamp".into(),
+//!     brdf: Brdf::Lambert(Lambert { albedo: Vec3::ZERO }),
+//!     // Radiance 10 W/(m^2 sr), diffuse (cos^0) profile.
+//!     emission: Some(Emission { radiance: Vec3::splat(10.0), profile: CosN::new(0.0)? }),
+//! });
+//! let quad = |y: f32, s: f32| vec![
+//!     Vec3::new(-s, y, -s), Vec3::new(s, y, -s), Vec3::new(s, y, s), Vec3::new(-s, y, s),
+//! ];
+//! // Triangles wind counter-clockwise around the side they face: up for the floor,
+//! scene.add_mesh("floor", quad(0.0, 1.0), vec![[0, 2, 1], [0, 3, 2]], grey)?;
+//! // down for the lamp (an emissive mesh becomes an area light).
+//! scene.add_mesh("lamp", quad(1.0, 0.25), vec![[0, 1, 2], [0, 2, 3]], lamp)?;
+//! scene.validate()?;
+//! assert_eq!((scene.triangle_count(), scene.lights().len()), (4, 1));
+//! # Ok(scene)
+//! # }
+//! # floor_and_light()?;
 //! # Ok::<(), adaptive_pm::Error>(())
+//! ```
+//!
+//! # The trace, the photon map and the irradiance estimate
+//!
+//! With the `embree` feature: commit the scene (the scene and its Embree
+//! geometry, owned together), trace, build the kd-tree, query it.
+//!
+//! ```
+//! # #[cfg(feature = "embree")] {
+//! # use adaptive_pm::prelude::*;
+//! # use glam::Vec3;
+//! # fn floor_and_light() -> adaptive_pm::Result<Scene> {
+//! #     let mut scene = Scene::new();
+//! #     let grey = scene.add_material(Material { name: "grey".into(),
+//! #         brdf: Brdf::Lambert(Lambert { albedo: Vec3::splat(0.5) }), emission: None });
+//! #     let lamp = scene.add_material(Material { name: "lamp".into(),
+//! #         brdf: Brdf::Lambert(Lambert { albedo: Vec3::ZERO }),
+//! #         emission: Some(Emission { radiance: Vec3::splat(10.0), profile: CosN::new(0.0)? }) });
+//! #     let quad = |y: f32, s: f32| vec![Vec3::new(-s, y, -s), Vec3::new(s, y, -s),
+//! #         Vec3::new(s, y, s), Vec3::new(-s, y, s)];
+//! #     scene.add_mesh("floor", quad(0.0, 1.0), vec![[0, 2, 1], [0, 3, 2]], grey)?;
+//! #     scene.add_mesh("lamp", quad(1.0, 0.25), vec![[0, 1, 2], [0, 2, 3]], lamp)?;
+//! #     Ok(scene)
+//! # }
+//! use adaptive_pm::embree::thread_pool;
+//! use adaptive_pm::render::{irradiance_estimate, Lookup};
+//!
+//! let scene = floor_and_light()?; // as above
+//! let device = Device::new()?;
+//! // 'static, Send + Sync: store it, share it between threads.
+//! let tracer = Tracer::new(scene.commit(&device)?);
+//! let pool = thread_pool(2)?; // rayon workers with FTZ/DAZ set for Embree
+//! let run = pool.install(|| tracer.trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(5_000))))?;
+//! assert_eq!(run.report.emitted, 5_000);
+//!
+//! let map: PhotonMap = run.into_map(); // balanced kd-tree over every stored photon
+//! let below_lamp = Vec3::new(0.0, 0.0, 0.0);
+//! let mut nearest = Vec::new();
+//! map.nearest_k(below_lamp, 50, f32::INFINITY, &mut nearest);
+//! assert_eq!(nearest.len(), 50);
+//! assert!(nearest.windows(2).all(|w| w[0].dist2 <= w[1].dist2)); // closest first
+//!
+//! // Irradiance under the lamp: a small square source of power P = L A pi at
+//! // height h gives about P / (pi h^2) = L A / h^2 = 2.5 W/m^2.
+//! let lookup = Lookup { k: 200, max_radius: 0.5 };
+//! let e = irradiance_estimate(&map, below_lamp, Vec3::Y, lookup, &mut nearest);
+//! let e = e.value.x;
+//! assert!((1.8..2.6).contains(&e), "{e}");
+//! # }
+//! # Ok::<(), adaptive_pm::Error>(())
+//! ```
+//!
+//! # A photon map from your own photons
+//!
+//! [`photon_map::PhotonMap::build`] takes any photon records, for instance
+//! from a tracer of your own:
+//!
+//! ```
+//! use adaptive_pm::photon_map::{PhotonMap, PhotonRecord};
+//! use glam::Vec3;
+//!
+//! let records: Vec<PhotonRecord> = (0..1000)
+//!     .map(|i| PhotonRecord {
+//!         position: Vec3::new((i % 10) as f32, 0.0, (i / 10) as f32 * 0.1),
+//!         power: Vec3::splat(0.001),
+//!         direction: Vec3::NEG_Y,
+//!         depth: 0,
+//!     })
+//!     .collect();
+//! let map = PhotonMap::build(&records);
+//! let mut near = Vec::new();
+//! map.nearest_k(Vec3::new(3.0, 0.0, 5.0), 4, f32::INFINITY, &mut near);
+//! // Indices are the map's own (tree) order: read the photon back from the map.
+//! let closest = map.photon(near[0].index);
+//! assert!((closest.position - Vec3::new(3.0, 0.0, 5.0)).length() < 1e-3);
 //! ```
 //!
 //! Modules: [`scene`] (model, glTF, lights), [`brdf`] and [`emitter`] (one
 //! file per model), [`analysis`] (directionality), [`engine`] (the wavefront
-//! tracer in its three modes), [`photon_map`] (compact photon, kd-tree,
-//! density), [`render`] (images from the map), [`experiments`] (the paper's
-//! Cornell sweep), [`embree`] (the safe Embree layer). Errors: [`Error`].
-#![warn(missing_docs)]
+//! tracer in its three modes), [`raycast`] (the ray-casting trait the tracer
+//! is generic over), [`photon_map`] (compact photon, kd-tree, density),
+//! `render` (images from the map) and `embree` (the safe Embree layer) with
+//! the `embree` feature. Common imports: [`prelude`]. Errors: [`Error`].
+//!
+//! # Features
+//!
+//! | feature | default | what it brings |
+//! |---|---|---|
+//! | `embree` | yes | `embree` (the Intel Embree ray caster, through `adaptive-pm-embree-sys`), `Scene::commit`, `render` |
+//! | `gltf` | yes | `Scene::load` of glTF 2.0 files and the built-in Cornell box (textures are ignored) |
+//! | `image-io` | yes | OpenEXR and PNG image files (`render::Image::write_exr`, `write_png`) |
+//! | `experiments` | with `cli` | the paper's experiments and their plots (`experiments`, for the command line: not a stable API) |
+//! | `cli` | yes | the `adaptive-pm` binary |
+//!
+//! [`photon_map`], [`brdf`], [`emitter`], [`analysis`], [`scene`] (built in
+//! code), [`engine`] (over a [`raycast::RayCaster`] of your own), [`sampling`]
+//! and [`rng`] build with no feature at all: no Embree, no libclang. A renderer that brings its own scenes and images depends on
+//! `adaptive-pm = { version = "0.1", default-features = false, features = ["embree"] }`
+//! (40 crates, `scripts/count-deps.sh`).
+#![warn(missing_docs, missing_debug_implementations)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 // `unsafe` lives in `embree-sys` and the one safe wrapper module below.
 #![deny(unsafe_code)]
 
 pub mod analysis;
 pub mod brdf;
+#[cfg(feature = "embree")]
 #[allow(unsafe_code)]
 pub mod embree;
 pub mod emitter;
 pub mod engine;
 pub mod error;
+// The paper's experiments drive the command line; they are not a stable API.
+#[cfg(feature = "experiments")]
+#[doc(hidden)]
 pub mod experiments;
 pub mod output;
 pub mod photon_map;
+pub mod prelude;
 pub mod raycast;
+#[cfg(feature = "embree")]
 pub mod render;
 pub mod rng;
 pub mod sampling;

@@ -114,7 +114,7 @@ fn quality_zero_is_an_empty_run_and_bad_input_is_a_clear_error() {
     assert_eq!(v["emitted"], 0);
     assert_eq!(v["stored"], 0);
     for (args, needle) in [
-        (vec!["trace", "cornell", "--quality", "1"], "budget"),
+        (vec!["trace", "cornell", "--quality", "1"], "--budget-mb"),
         (vec!["trace", "cornell", "--quality", "1.5"], "quality"),
         (vec!["trace", "cornell", "--cosn", "-1"], "cosn"),
         (vec!["trace", "cornell", "--cosn", "NaN"], "cosn"),

@@ -283,9 +283,7 @@ fn any_n_max_over_two_lights_traces_or_is_refused() {
         scene.add_light(light).unwrap();
     }
     let device = Device::new().unwrap();
-    let rt = scene.commit(&device).unwrap();
-    // `run` takes an `Fn`: the tracer (and its analysis cache) sits in a RefCell.
-    let tracer = std::cell::RefCell::new(Tracer::new(&scene, &rt));
+    let tracer = Tracer::new(scene.commit(&device).unwrap());
     let mut runner =
         proptest::test_runner::TestRunner::new(proptest::test_runner::Config::with_cases(32));
     let n_max = prop_oneof![0u64..2000, any::<u64>(), (u64::MAX - 8)..=u64::MAX];
@@ -294,7 +292,7 @@ fn any_n_max_over_two_lights_traces_or_is_refused() {
             let mode = [Mode::Classic, Mode::Density, Mode::Adaptive][m];
             let mut cfg = TraceConfig::new(mode, Budget::NMax(n));
             cfg.memory_budget = Some(64 << 20);
-            let result = tracer.borrow_mut().trace(&cfg);
+            let result = tracer.trace(&cfg);
             match result {
                 Ok(out) => prop_assert!(out.report.emitted <= n.saturating_mul(2).max(3)),
                 Err(e) => prop_assert!(matches!(e, Error::Budget { .. }), "{e}"),

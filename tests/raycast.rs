@@ -103,20 +103,49 @@ fn mismatches_are_errors_not_panics() {
     assert!(e.to_string().contains("material 42"), "{e}");
 
     // Another scene's Embree geometry: one mesh fewer.
-    let mut other = cornell.clone();
-    other.meshes.pop();
+    let n = cornell.meshes().len();
+    let other = rebuilt(&cornell, n - 1, |m| m);
     let rt = other.embree_geometry(&device).unwrap();
     let e = PreparedScene::new(cornell.clone(), rt).unwrap_err();
     assert!(matches!(e, Error::InvalidScene(_)), "{e}");
     // Same mesh count, materials swapped.
-    let mut swapped = cornell.clone();
-    let a = swapped.meshes[0].material;
-    let j = (1..swapped.meshes.len())
-        .find(|&j| swapped.meshes[j].material != a)
+    let a = cornell.meshes()[0].material;
+    let j = (1..n)
+        .find(|&j| cornell.meshes()[j].material != a)
         .expect("the Cornell box has several materials");
-    swapped.meshes[0].material = swapped.meshes[j].material;
-    swapped.meshes[j].material = a;
+    let b = cornell.meshes()[j].material;
+    let swapped = rebuilt(&cornell, n, |m| {
+        if m == a {
+            b
+        } else if m == b {
+            a
+        } else {
+            m
+        }
+    });
     let rt = Arc::new(swapped.embree_geometry(&device).unwrap());
     assert!(PreparedScene::new(cornell, Arc::clone(&rt)).is_err());
     assert!(PreparedScene::new(swapped, rt).is_ok());
+}
+
+/// `src` with its first `meshes` meshes, their materials renamed by `material`.
+fn rebuilt(src: &Scene, meshes: usize, material: impl Fn(usize) -> usize) -> Scene {
+    let mut scene = Scene::new();
+    for m in src.materials() {
+        scene.add_material(m.clone());
+    }
+    for mesh in &src.meshes()[..meshes] {
+        let (name, pos, idx) = (
+            mesh.name.clone(),
+            mesh.positions.clone(),
+            mesh.indices.clone(),
+        );
+        scene
+            .add_mesh(name, pos, idx, material(mesh.material))
+            .unwrap();
+    }
+    if let Some(c) = src.camera() {
+        scene.set_camera(c).unwrap();
+    }
+    scene
 }

@@ -3,7 +3,7 @@
 //! headers with an Embree 3 `.so` on the library path) fails here rather
 //! than as memory corruption in a ray query.
 
-use embree_sys::*;
+use adaptive_pm_embree_sys::*;
 
 #[test]
 fn rayhit_size_matches_the_c_compiler() {

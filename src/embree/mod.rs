@@ -15,12 +15,16 @@
 //!   [`DEFAULT_BATCH_KERNEL`]; both kernels are measured in `benches/rays.rs`.
 //! - [`set_flush_denormals`] / [`thread_pool`]: Embree's traversal expects
 //!   flush-to-zero and denormals-are-zero on every tracing thread.
-//! - [`throughput`]: the measurement behind `adaptive-pm bench rays`.
+//! - `throughput` (with the `cli` feature, hidden): the measurement behind
+//!   `adaptive-pm bench rays`.
 
 mod commit;
 mod device;
 mod scene;
 mod threads;
+// The `bench rays` measurement: the command line's, not a library API.
+#[cfg(feature = "cli")]
+#[doc(hidden)]
 pub mod throughput;
 
 pub use commit::EmbreeScene;
@@ -29,6 +33,8 @@ pub use scene::{BatchKernel, CommittedScene, SceneBuilder, DEFAULT_BATCH_KERNEL,
 pub use threads::{
     flush_denormals_enabled, max_threads, set_flush_denormals, thread_pool, MAX_THREADS_PER_CORE,
 };
+#[cfg(feature = "cli")]
+#[doc(hidden)]
 pub use throughput::{measure_throughput, Throughput};
 
 // The ray and hit types are Embree-free (the engine is generic over

@@ -20,6 +20,7 @@ pub const DENSITY_POINTS: usize = 4096;
 pub const DENSITY_POINTS_SEED: u64 = 0xDE45_1717;
 
 /// Both maps of a run, with their build times.
+#[derive(Debug)]
 pub struct Maps {
     /// All stored photons.
     pub full: PhotonMap,

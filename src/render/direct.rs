@@ -165,6 +165,7 @@ pub fn quadrature_irradiance(
 /// (the floor: `floor`), inset by `margin` (a fraction of the extent) from the
 /// bounding box, keeping points inside a triangle. Normals face up (+y when
 /// the winding says otherwise they are flipped towards +y).
+#[doc(hidden)]
 pub fn floor_points(
     scene: &Scene,
     prefix: &str,

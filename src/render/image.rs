@@ -105,10 +105,12 @@ pub fn check_output_path(path: &Path) -> Result<()> {
 
 /// Writes through `write` to an exclusive temporary file, then renames it to
 /// `path` ([`crate::output::write_via_path`]).
+#[cfg(feature = "image-io")]
 fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> std::io::Result<()>) -> Result<()> {
     crate::output::write_via_path(path, write)
 }
 
+#[cfg(feature = "image-io")]
 fn exr_io(e: exr::error::Error) -> std::io::Error {
     match e {
         exr::error::Error::Io(e) => e,
@@ -143,7 +145,11 @@ impl Image {
         let n = self.pixels.len().max(1) as f64;
         Vec3::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
     }
+}
 
+/// Image files: the `image-io` feature.
+#[cfg(feature = "image-io")]
+impl Image {
     /// Writes linear RGB as a 32-bit float OpenEXR file (temporary name, then rename).
     ///
     /// # Errors

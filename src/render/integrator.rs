@@ -179,7 +179,8 @@ impl<'a> Ctx<'a> {
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] for bad settings or a view that needs a photon
-/// map when `maps` is `None`.
+/// map when `maps` is `None`; [`Error::InvalidScene`] when neither `cfg` nor
+/// the scene has a camera.
 pub fn render(
     scene: &Scene,
     rt: &CommittedScene,
@@ -195,7 +196,7 @@ pub fn render(
         ));
     }
     let mut image = Image::new(cfg.width, cfg.height)?;
-    let camera = cfg.camera_for(scene);
+    let camera = cfg.camera_for(scene)?;
     let rays = CameraRays::new(&camera, cfg.width, cfg.height);
     let ctx = Ctx {
         scene,

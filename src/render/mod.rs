@@ -76,7 +76,10 @@ mod integrator;
 pub mod metrics;
 
 pub use camera::CameraRays;
-pub use direct::{floor_points, quadrature_irradiance};
+pub use direct::quadrature_irradiance;
+// Probe points of the trade study and the tests (a named mesh's top face): not a library API.
+#[doc(hidden)]
+pub use direct::floor_points;
 pub use estimate::{irradiance_default, irradiance_estimate, radiance_estimate, Estimate, Lookup};
 pub use image::{check_output_path, Image, ToneMap, MAX_DIMENSION};
 pub use integrator::render;
@@ -136,7 +139,8 @@ pub struct RenderConfig {
     pub view: View,
     /// Seed of the pixel samples.
     pub seed: u64,
-    /// The camera; `None` is the scene's camera, else [`Camera::cornell`].
+    /// The camera; `None` is the scene's camera (a scene without one is an
+    /// error: there is no silent default view).
     pub camera: Option<Camera>,
     /// Show the emission of emitters the camera sees (directly or in mirrors).
     /// Error measurements turn it off: the emission is exact and the same in
@@ -197,13 +201,21 @@ impl RenderConfig {
         Ok(())
     }
 
-    /// The camera this render uses for `scene`.
-    pub fn camera_for(&self, scene: &Scene) -> Camera {
-        self.camera.or(scene.camera).unwrap_or_else(Camera::cornell)
+    /// The camera this render uses for `scene`: [`RenderConfig::camera`], else the scene's.
+    ///
+    /// # Errors
+    /// [`Error::InvalidScene`] when neither gives one.
+    pub fn camera_for(&self, scene: &Scene) -> Result<Camera> {
+        self.camera.or(scene.camera).ok_or_else(|| {
+            Error::InvalidScene(
+                "the scene has no camera: give the render one (RenderConfig::camera)".into(),
+            )
+        })
     }
 }
 
 /// The photon maps a render reads, each a balanced kd-tree.
+#[derive(Debug)]
 pub struct RenderMaps {
     /// Every stored photon (final gather reads it at secondary hits; the map view).
     pub full: PhotonMap,

@@ -6,15 +6,21 @@
 //! Only what the scene uses is modelled: the directionality analysis later runs on
 //! the emitters and materials found here, nothing else.
 
+#[cfg(feature = "gltf")]
 mod buffers;
 mod checks;
+#[cfg(feature = "gltf")]
 mod cornell;
+#[cfg(feature = "gltf")]
 mod gltf_data;
+#[cfg(feature = "gltf")]
 mod gltf_graph;
+#[cfg(feature = "gltf")]
 mod gltf_load;
 mod light;
 mod prepared;
 mod surface;
+#[cfg(feature = "gltf")]
 pub mod validate;
 
 pub use buffers::{percent_decode, resolve_inside, MAX_BUFFER_BYTES};
@@ -28,9 +34,11 @@ use crate::brdf::Brdf;
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::Vec3;
+#[cfg(feature = "gltf")]
 use std::path::Path;
 
 /// What a built-in scene is called on the command line.
+#[doc(hidden)]
 pub const BUILTIN_CORNELL: &str = "cornell";
 
 /// A surface material: a BRDF, and emission when the surface is a light.
@@ -147,6 +155,7 @@ impl Scene {
     }
 
     /// The built-in Cornell box (see `assets/cornell_box.gltf`).
+    #[cfg(feature = "gltf")]
     ///
     /// # Errors
     /// Never in practice: the asset is compiled in and tested.
@@ -161,11 +170,16 @@ impl Scene {
     /// [`Error::InvalidScene`] for NaN or infinite positions, a scene without
     /// any light, or an unsupported primitive; [`Error::InvalidParameter`] for a
     /// negative or NaN `cos^n` exponent.
+    #[cfg(feature = "gltf")]
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         gltf_load::load_path(path.as_ref())
     }
 
-    /// `cornell` for the built-in scene, else a path to a glTF file.
+    /// `cornell` for the built-in scene, else a path to a glTF file: the
+    /// command line's scene argument (a library names its scene explicitly,
+    /// with [`Scene::cornell`] or [`Scene::load`]).
+    #[cfg(feature = "gltf")]
+    #[doc(hidden)]
     ///
     /// # Errors
     /// As [`Scene::load`].

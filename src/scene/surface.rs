@@ -89,14 +89,14 @@ impl SurfaceSampler {
         count: usize,
         seed: u64,
         epsilon: f32,
-    ) -> Vec<crate::embree::Ray> {
+    ) -> Vec<crate::raycast::Ray> {
         (0..count)
             .filter_map(|i| {
                 let mut rng = Rng::new(hash2(seed ^ 0x4A75, i as u64));
                 let p = self.sample(rng.next_f64(), rng.next_2d())?;
                 let local = crate::sampling::cosine_hemisphere(rng.next_2d());
                 let dir = crate::sampling::Frame::from_normal(p.normal).world_from_local(local);
-                Some(crate::embree::Ray::new(
+                Some(crate::raycast::Ray::new(
                     p.position + p.normal * epsilon,
                     dir,
                 ))

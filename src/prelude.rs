@@ -1,0 +1,19 @@
+//! The types most programs need, in one import: `use adaptive_pm::prelude::*;`.
+//!
+//! Scene building ([`Scene`], [`Material`], [`Brdf`] and its models, [`CosN`]
+//! emission), the photon map ([`PhotonMap`], [`PhotonRecord`], [`Neighbor`]),
+//! the tracer and its configuration, the ray-casting trait, errors, and with
+//! the `embree` feature the Embree device and the irradiance estimate.
+
+pub use crate::brdf::{Brdf, CookTorrance, Lambert, Mirror, Phong};
+pub use crate::emitter::CosN;
+pub use crate::engine::{Budget, Mode, TraceConfig, TraceOutput, Tracer};
+pub use crate::error::{Error, Result};
+pub use crate::photon_map::{Neighbor, PhotonMap, PhotonRecord};
+pub use crate::raycast::{Hit, Ray, RayCaster};
+pub use crate::scene::{Camera, Emission, Light, Material, PreparedScene, Scene};
+
+#[cfg(feature = "embree")]
+pub use crate::embree::Device;
+#[cfg(feature = "embree")]
+pub use crate::render::{irradiance_estimate, Lookup};
