@@ -41,6 +41,7 @@ pub mod emitter;
 pub mod engine;
 pub mod error;
 pub mod experiments;
+pub mod photon_file;
 pub mod photon_map;
 pub mod render;
 pub mod rng;

@@ -19,6 +19,8 @@ pub struct TraceArgs {
     pub budget: BudgetArgs,
     #[command(flatten)]
     pub threads: ThreadArgs,
+    #[command(flatten)]
+    pub shard: super::shard::ShardArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -26,7 +28,9 @@ pub struct TraceArgs {
 
 pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     let scene = open_scene(&args.scene, args.budget.cosn)?;
-    let cfg: TraceConfig = args.budget.config(args.mode)?;
+    let mut cfg: TraceConfig = args.budget.config(args.mode)?;
+    cfg.shard = args.shard.resolve()?;
+    cfg.validate()?;
     let pool = args.threads.pool()?;
     let device = Device::new()?;
     let rt = scene.commit(&device)?;
@@ -48,6 +52,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         let metrics = measure(&maps, &points);
         (maps, metrics)
     });
+    let checksum = pool.install(|| super::shard::checksum_and_write(&args.shard, &scene, &cfg, &out))?;
     let r = &out.report;
     let value = json!({
         "scene": args.scene,
@@ -82,7 +87,8 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         "capped_hits": r.capped_hits,
         "density_rejected": r.density_rejected,
         "stored_power": r.stored_power,
-        "checksum": format!("{:016x}", metrics.checksum),
+        "shard": cfg.shard.to_string(),
+        "checksum": format!("{checksum:016x}"),
     });
     if args.json {
         println!("{value}");
@@ -142,6 +148,6 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             r.capped_hits
         );
     }
-    println!("checksum       {:016x}", metrics.checksum);
+    println!("checksum       {checksum:016x} (shard {})", cfg.shard);
     Ok(())
 }

@@ -2,6 +2,7 @@
 //! bounds on splitting and on memory, and the seed.
 
 use crate::analysis::{AnalysisParams, Estimator};
+use super::shard::Shard;
 use crate::error::{Error, Result};
 
 /// `INT_MAX` of the paper's `N_MAX = Q^2 * INT_MAX`.
@@ -121,6 +122,8 @@ pub struct TraceConfig {
     pub density_target: DensityTarget,
     /// Photons per parallel batch; results do not depend on it.
     pub batch: usize,
+    /// Which emitted photons to trace (the whole run by default).
+    pub shard: Shard,
 }
 
 impl TraceConfig {
@@ -137,6 +140,7 @@ impl TraceConfig {
             analysis: AnalysisParams::default(),
             density_target: DensityTarget::Auto,
             batch: 1024,
+            shard: Shard::WHOLE,
         }
     }
 
@@ -162,6 +166,14 @@ impl TraceConfig {
                     format!("must be a positive number, got {d}"),
                 ));
             }
+        }
+        self.shard.validate()?;
+        if self.mode == Mode::Density && !self.shard.is_whole() {
+            return Err(Error::param(
+                "shard",
+                "density control cannot be sharded: whether a photon is stored depends on \
+                 every photon stored before it in the whole run (use classic or adaptive)",
+            ));
         }
         if self.batch == 0 {
             return Err(Error::param("batch", "must be at least 1"));

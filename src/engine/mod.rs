@@ -20,10 +20,12 @@ pub mod counts;
 mod density_control;
 pub mod measure;
 pub mod report;
+pub mod shard;
 pub mod tracer;
 pub mod wave;
 
 pub use config::{Budget, DensityTarget, Mode, TraceConfig};
 pub use measure::{measure, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};
+pub use shard::Shard;
 pub use tracer::{Progress, TraceOutput, Tracer};

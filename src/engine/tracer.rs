@@ -145,7 +145,8 @@ impl<'s> Tracer<'s> {
         };
         let n_max = cfg.budget.n_max()?;
         let plans = plan_emission(self.scene, cfg.mode, n_max, cache)?;
-        let emitted: u64 = plans.iter().map(|p| p.photons).sum();
+        // The budget is per shard: only this shard's photons are traced.
+        let emitted: u64 = plans.iter().map(|p| cfg.shard.len_of(p.photons)).sum();
         let budget_bytes = cfg.memory_budget.unwrap_or_else(|| available_memory() / 2);
         let max_photons = budget_bytes / BYTES_PER_PHOTON_IN_FLIGHT;
         if emitted > max_photons {
@@ -300,15 +301,16 @@ impl<'s> Tracer<'s> {
         })
     }
 
-    /// Wave 0: every light's photons, photon `i` of light `l` keyed by (seed, l, i).
+    /// Wave 0: every light's photons (of `cfg.shard`), photon `i` of light `l` keyed by (seed, l, i).
     fn emit(&self, cfg: &TraceConfig, plans: &[LightPlan], epsilon: f32) -> Vec<PathState> {
-        let total: u64 = plans.iter().map(|p| p.photons).sum();
+        let total: u64 = plans.iter().map(|p| cfg.shard.len_of(p.photons)).sum();
         let mut queue = Vec::with_capacity(total as usize);
         for (l, (light, plan)) in self.scene.lights.iter().zip(plans).enumerate() {
             let power = photon_power(light, plan);
             let light_key = hash2(cfg.seed, l as u64);
             // Indexed: par_extend keeps photon i at position start + i.
-            queue.par_extend((0..plan.photons).into_par_iter().map(|i| {
+            // A shard emits its own ids only (`Shard::range`); their keys are unchanged.
+            queue.par_extend(cfg.shard.range(plan.photons).into_par_iter().map(|i| {
                 let key = hash2(light_key, i);
                 let mut rng = Rng::new(key);
                 let e = light.sample(rng.next_f32(), rng.next_2d(), rng.next_2d());

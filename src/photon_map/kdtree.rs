@@ -112,6 +112,21 @@ impl PhotonMap {
         }
     }
 
+    /// A map of photons already encoded in the frame `quant` (read from a photon
+    /// file), built into its kd-tree in place. Their split-axis bits must be 0.
+    pub(crate) fn from_compact(mut photons: Vec<CompactPhoton>, quant: Quantizer) -> PhotonMap {
+        assert!(
+            photons.len() <= u32::MAX as usize,
+            "a photon map holds at most u32::MAX photons"
+        );
+        build_subtree(&mut photons);
+        PhotonMap {
+            photons,
+            quant,
+            skipped: 0,
+        }
+    }
+
     /// Number of photons.
     pub fn len(&self) -> usize {
         self.photons.len()
