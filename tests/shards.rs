@@ -65,7 +65,10 @@ fn only(dir: &Path, keep: &[PathBuf]) {
 fn merged_shards_reproduce_the_single_run_checksum() {
     let device = Device::new().unwrap();
     let pool = thread_pool(0).unwrap();
-    for (name, scene) in [("cornell", Scene::cornell().unwrap()), ("gallery", gallery())] {
+    for (name, scene) in [
+        ("cornell", Scene::cornell().unwrap()),
+        ("gallery", gallery()),
+    ] {
         let rt = scene.commit(&device).unwrap();
         let mut tracer = Tracer::new(&scene, &rt);
         for mode in [Mode::Classic, Mode::Adaptive] {
@@ -113,7 +116,10 @@ fn density_control_refuses_to_shard() {
     let e = cfg(Mode::Density, 1000, Shard::new(0, 2).unwrap())
         .validate()
         .unwrap_err();
-    assert!(e.to_string().contains("density control cannot be sharded"), "{e}");
+    assert!(
+        e.to_string().contains("density control cannot be sharded"),
+        "{e}"
+    );
     assert!(cfg(Mode::Density, 1000, Shard::WHOLE).validate().is_ok());
 }
 
@@ -181,7 +187,10 @@ fn refused(inputs: &[PathBuf], dir: &Path, expect: &str) {
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert!(!names.iter().any(|n| n.contains("merged")), "left: {names:?}");
+    assert!(
+        !names.iter().any(|n| n.contains("merged")),
+        "left: {names:?}"
+    );
 }
 
 #[test]
@@ -221,8 +230,16 @@ fn merge_refuses_every_bad_case_and_leaves_nothing() {
     merge(g, &out).unwrap();
     let mut keep = g.clone();
     keep.extend(
-        ["seed8", "sharp", "truncated", "photon", "header", "junk", "ok"]
-            .map(|n| d.join(format!("{n}.apm"))),
+        [
+            "seed8",
+            "sharp",
+            "truncated",
+            "photon",
+            "header",
+            "junk",
+            "ok",
+        ]
+        .map(|n| d.join(format!("{n}.apm"))),
     );
     only(d, &keep);
 }

@@ -61,7 +61,11 @@ fn scheduler_shards_merge_to_the_single_checksum_and_render_the_same() {
     let mut k8s = Vec::new();
     for i in ["0", "1", "2"] {
         let p = d(&format!("k8s{i}.apm"));
-        trace(Path::new(&p), &["--shards", "3"], &[("JOB_COMPLETION_INDEX", i)]);
+        trace(
+            Path::new(&p),
+            &["--shards", "3"],
+            &[("JOB_COMPLETION_INDEX", i)],
+        );
         k8s.push(p);
     }
     for (name, files) in [("slurm", &slurm), ("k8s", &k8s)] {
@@ -75,7 +79,10 @@ fn scheduler_shards_merge_to_the_single_checksum_and_render_the_same() {
     }
     // The merged map is the whole run's map file, photon for photon.
     let bytes = |p: &str| std::fs::read(p).unwrap();
-    assert_eq!(bytes(&d("slurm-map.apm"))[4096..], bytes(&d("k8s-map.apm"))[4096..]);
+    assert_eq!(
+        bytes(&d("slurm-map.apm"))[4096..],
+        bytes(&d("k8s-map.apm"))[4096..]
+    );
     // render --map: the merged map renders as the whole run's file; tiles assemble to it.
     let render = |map: &str, out: &str, tile: Option<&str>| {
         let mut a = vec![
@@ -105,7 +112,10 @@ fn scheduler_shards_merge_to_the_single_checksum_and_render_the_same() {
     assert_eq!(img(&full), img(&d("merged.exr")));
     // A missing tile is refused, nothing written.
     let bad = d("bad.exr");
-    let (code, _, err) = run(&["assemble", "--out", &bad, &tiles[0], &tiles[2], &tiles[3]], &[]);
+    let (code, _, err) = run(
+        &["assemble", "--out", &bad, &tiles[0], &tiles[2], &tiles[3]],
+        &[],
+    );
     assert_ne!(code, 0);
     assert!(err.contains("missing"), "{err}");
     assert!(!Path::new(&bad).exists());
@@ -123,9 +133,17 @@ fn bad_shard_requests_are_clear_errors() {
     let out = dir.path().join("x.apm");
     let o = out.to_str().unwrap();
     let cases: [(&[&str], &[(&str, &str)], &str); 4] = [
-        (&["--mode", "density", "--shard", "0/2", "--out", o], &[], "density control cannot be sharded"),
+        (
+            &["--mode", "density", "--shard", "0/2", "--out", o],
+            &[],
+            "density control cannot be sharded",
+        ),
         (&["--shard", "3/3", "--out", o], &[], "not below the count"),
-        (&["--out", o], &[("JOB_COMPLETION_INDEX", "1")], "--shards N"),
+        (
+            &["--out", o],
+            &[("JOB_COMPLETION_INDEX", "1")],
+            "--shards N",
+        ),
         (&["--shard", "0/2"], &[], "--shard needs --out"),
     ];
     for (args, env, expect) in cases {

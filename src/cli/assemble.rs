@@ -36,8 +36,10 @@ pub fn write_tile(image: &Image, y0: u32, full_height: u32, path: &Path) -> anyh
         let p = image.pixels[y * w + x];
         (p.x, p.y, p.z)
     });
-    let mut attrs = LayerAttributes::default();
-    attrs.layer_position = Vec2(0, y0 as i32);
+    let attrs = LayerAttributes {
+        layer_position: Vec2(0, y0 as i32),
+        ..LayerAttributes::default()
+    };
     let layer = Layer::new(
         (w, image.height as usize),
         attrs,
@@ -76,7 +78,10 @@ fn read_tile(path: &Path) -> anyhow::Result<Tile> {
     let pos = img.layer_data.attributes.layer_position;
     let size = img.layer_data.size;
     if d.position != Vec2(0, 0) || pos.x() != 0 || size.width() != d.size.width() {
-        bail!("{}: not a tile of whole rows (render --tile)", path.display());
+        bail!(
+            "{}: not a tile of whole rows (render --tile)",
+            path.display()
+        );
     }
     if pos.y() < 0 || pos.y() as usize + size.height() > d.size.height() {
         bail!("{}: its rows lie outside its image", path.display());
@@ -103,7 +108,12 @@ pub fn run(args: AssembleArgs) -> anyhow::Result<()> {
     let mut next = 0usize;
     for (p, t) in &tiles {
         if t.display != (w, h) {
-            bail!("{} is a tile of a {}x{} image, not {w}x{h}", p.display(), t.display.0, t.display.1);
+            bail!(
+                "{} is a tile of a {}x{} image, not {w}x{h}",
+                p.display(),
+                t.display.0,
+                t.display.1
+            );
         }
         if t.y0 < next {
             bail!("{} overlaps another tile at row {}", p.display(), t.y0);
@@ -122,6 +132,12 @@ pub fn run(args: AssembleArgs) -> anyhow::Result<()> {
         image.pixels[start..start + t.image.pixels.len()].copy_from_slice(&t.image.pixels);
     }
     image.write_exr(&args.out)?;
-    println!("assembled {} tiles into {}x{}: wrote {}", tiles.len(), w, h, args.out.display());
+    println!(
+        "assembled {} tiles into {}x{}: wrote {}",
+        tiles.len(),
+        w,
+        h,
+        args.out.display()
+    );
     Ok(())
 }

@@ -51,7 +51,9 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
         h.merged_from, h.photons, h.emitted, merge_s
     );
     if budget_bound {
-        println!("note: the memory budget bound in a shard: the map differs from an unbounded run's");
+        println!(
+            "note: the memory budget bound in a shard: the map differs from an unbounded run's"
+        );
     }
     println!("checksum       {:016x}", m.checksum);
     println!("wrote {}", args.out.display());

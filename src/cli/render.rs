@@ -86,7 +86,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     cfg.k = args.k;
     cfg.view = view;
     cfg.seed = args.budget.seed;
-    cfg.rows = args.tile.map(|t| super::assemble::tile_rows(t, args.height));
+    cfg.rows = args
+        .tile
+        .map(|t| super::assemble::tile_rows(t, args.height));
     // Fail before any work: bad sizes, a missing folder, an unwritable path.
     cfg.validate()?;
     check_output_path(&args.out)?;
@@ -128,7 +130,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let render_s = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
     match (args.tile, cfg.rows) {
-        (Some(_), Some((y0, _))) => super::assemble::write_tile(&image, y0, args.height, &args.out)?,
+        (Some(_), Some((y0, _))) => {
+            super::assemble::write_tile(&image, y0, args.height, &args.out)?
+        }
         _ => image.write_exr(&args.out)?,
     }
     if let Some(p) = &args.png {

@@ -2,7 +2,9 @@
 //! flag or from the scheduler's environment) and writing its photon file.
 
 use adaptive_pm::engine::{Shard, TraceConfig, TraceOutput};
-use adaptive_pm::photon_file::{canonical_frame, run_checksum, scene_hash, write_records, ShardInfo};
+use adaptive_pm::photon_file::{
+    canonical_frame, run_checksum, scene_hash, write_records, ShardInfo,
+};
 use adaptive_pm::scene::Scene;
 use anyhow::{bail, Context};
 use std::path::PathBuf;

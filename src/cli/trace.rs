@@ -52,7 +52,8 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         let metrics = measure(&maps, &points);
         (maps, metrics)
     });
-    let checksum = pool.install(|| super::shard::checksum_and_write(&args.shard, &scene, &cfg, &out))?;
+    let checksum =
+        pool.install(|| super::shard::checksum_and_write(&args.shard, &scene, &cfg, &out))?;
     let r = &out.report;
     let value = json!({
         "scene": args.scene,

@@ -1,8 +1,8 @@
 //! What a run is asked to do: the mode, the photon budget (Q or N_MAX), the
 //! bounds on splitting and on memory, and the seed.
 
-use crate::analysis::{AnalysisParams, Estimator};
 use super::shard::Shard;
+use crate::analysis::{AnalysisParams, Estimator};
 use crate::error::{Error, Result};
 
 /// `INT_MAX` of the paper's `N_MAX = Q^2 * INT_MAX`.

@@ -116,7 +116,10 @@ mod tests {
 
     #[test]
     fn parses_and_refuses() {
-        assert_eq!("2/7".parse::<Shard>().unwrap(), Shard { index: 2, count: 7 });
+        assert_eq!(
+            "2/7".parse::<Shard>().unwrap(),
+            Shard { index: 2, count: 7 }
+        );
         for bad in ["7/7", "0/0", "1", "a/2", "-1/2", ""] {
             assert!(bad.parse::<Shard>().is_err(), "{bad}");
         }

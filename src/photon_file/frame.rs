@@ -53,7 +53,7 @@ impl CanonicalFrame {
 
 /// `2^(ceil(log2(brightest)) + headroom)`, within f32's normal range; 0 for no light.
 fn power_scale(brightest: f32) -> f32 {
-    if !(brightest > 0.0) {
+    if brightest.is_nan() || brightest <= 0.0 {
         return 0.0;
     }
     let e = (brightest as f64).log2().ceil() as i32 + POWER_HEADROOM_BITS;
@@ -105,9 +105,7 @@ impl MapHash {
     pub fn add(&mut self, p: &CompactPhoton) {
         let (a, b) = CompactPhoton::from_bits(p.bits().0, p.bits().1).bits();
         self.count += 1;
-        self.sum = self
-            .sum
-            .wrapping_add(hash2(hash2(0x9407_0A5E, a), b));
+        self.sum = self.sum.wrapping_add(hash2(hash2(0x9407_0A5E, a), b));
     }
 
     /// Adds another map's photons.
@@ -173,7 +171,7 @@ fn debug_hash(seed: u64, value: &dyn std::fmt::Debug) -> u64 {
     let mut w = HashWriter(mix64(seed), [0; 8], 0);
     // Writing to a hasher cannot fail.
     let _ = write!(w, "{value:?}");
-    let tail = u64::from_le_bytes(w.1) ^ (w.2 as u64) << 56;
+    let tail = u64::from_le_bytes(w.1) ^ ((w.2 as u64) << 56);
     hash2(w.0, tail)
 }
 

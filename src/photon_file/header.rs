@@ -104,12 +104,22 @@ impl Header {
         for v in [self.photons, self.emitted, self.emitted_total] {
             b.extend_from_slice(&v.to_le_bytes());
         }
-        for v in self.frame_min.to_array().iter().chain(&self.frame_max.to_array()) {
+        for v in self
+            .frame_min
+            .to_array()
+            .iter()
+            .chain(&self.frame_max.to_array())
+        {
             b.extend_from_slice(&v.to_le_bytes());
         }
         b.extend_from_slice(&self.power_scale.to_le_bytes());
         b.extend_from_slice(&self.merged_from.to_le_bytes());
-        for v in [self.photon_sum, self.map_checksum, self.clamped, self.skipped] {
+        for v in [
+            self.photon_sum,
+            self.map_checksum,
+            self.clamped,
+            self.skipped,
+        ] {
             b.extend_from_slice(&v.to_le_bytes());
         }
         debug_assert_eq!(b.len(), DEPTH_PHOTONS_AT);
@@ -142,7 +152,9 @@ impl Header {
         }
         let header_size = r.u32();
         if header_size as usize != HEADER_SIZE {
-            return Err(bad(format!("header size {header_size}, expected {HEADER_SIZE}")));
+            return Err(bad(format!(
+                "header size {header_size}, expected {HEADER_SIZE}"
+            )));
         }
         let flags = r.u32();
         let (mode, estimator) = (r.u8(), r.u8());

@@ -31,7 +31,10 @@ fn check_shards(inputs: &[PathBuf]) -> Result<Vec<PhotonReader>> {
     let mut readers: Vec<PhotonReader> = Vec::with_capacity(inputs.len());
     let h0 = PhotonReader::open(first)?.header().clone();
     if h0.flags & FLAG_MERGED != 0 {
-        return Err(refuse(format!("{} is already a merged map", first.display())));
+        return Err(refuse(format!(
+            "{} is already a merged map",
+            first.display()
+        )));
     }
     let n = h0.shard_count;
     let mut seen: Vec<Option<&Path>> = vec![None; n as usize];
@@ -49,7 +52,9 @@ fn check_shards(inputs: &[PathBuf]) -> Result<Vec<PhotonReader>> {
             return Err(other("scenes"));
         }
         if h.settings != h0.settings {
-            return Err(other("settings (mode, seed, N_MAX, depth, split cap or analysis)"));
+            return Err(other(
+                "settings (mode, seed, N_MAX, depth, split cap or analysis)",
+            ));
         }
         if (h.frame_min, h.frame_max, h.power_scale) != (h0.frame_min, h0.frame_max, h0.power_scale)
             || h.emitted_total != h0.emitted_total
@@ -69,7 +74,10 @@ fn check_shards(inputs: &[PathBuf]) -> Result<Vec<PhotonReader>> {
         }
         let i = h.shard_index as usize;
         if i >= seen.len() {
-            return Err(refuse(format!("{}: shard index {i} out of 0..{n}", path.display())));
+            return Err(refuse(format!(
+                "{}: shard index {i} out of 0..{n}",
+                path.display()
+            )));
         }
         if let Some(p) = seen[i] {
             return Err(refuse(format!(
@@ -117,11 +125,16 @@ fn merged_header(readers: &[PhotonReader]) -> Header {
             count: s.photons,
             sum: s.photon_sum,
         });
-        for d in 0..DEPTHS {
-            h.depth_photons[d] += s.depth_photons[d];
-            for c in 0..3 {
-                h.depth_power[d][c] += s.depth_power[d][c];
-            }
+        for (a, b) in h.depth_photons.iter_mut().zip(&s.depth_photons) {
+            *a += b;
+        }
+        for (a, b) in h
+            .depth_power
+            .iter_mut()
+            .flatten()
+            .zip(s.depth_power.iter().flatten())
+        {
+            *a += b;
         }
     }
     h.photons = photons;

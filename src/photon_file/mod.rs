@@ -22,8 +22,13 @@ mod output;
 mod reader;
 mod writer;
 
-pub use frame::{canonical_frame, run_checksum, CanonicalFrame, scene_hash, settings_hash, ByteHash, MapHash};
-pub use header::{Header, Settings, DEPTHS, FLAG_BUDGET_BOUND, FLAG_MERGED, HEADER_SIZE, MAGIC, TRAILER_MAGIC, VERSION};
+pub use frame::{
+    canonical_frame, run_checksum, scene_hash, settings_hash, ByteHash, CanonicalFrame, MapHash,
+};
+pub use header::{
+    Header, Settings, DEPTHS, FLAG_BUDGET_BOUND, FLAG_MERGED, HEADER_SIZE, MAGIC, TRAILER_MAGIC,
+    VERSION,
+};
 pub use merge::{merge, MergeSummary};
 pub use output::AtomicOutput;
 pub use reader::{read_map, read_render_maps, PhotonReader};

@@ -157,7 +157,10 @@ pub fn read_map(path: &Path, keep: impl Fn(&CompactPhoton) -> bool) -> Result<(H
     while let Some(bytes) = r.next_bytes()? {
         photons.extend(photons_of(bytes).filter(|p| keep(p)));
     }
-    Ok((header.clone(), PhotonMap::from_compact(photons, header.frame())))
+    Ok((
+        header.clone(),
+        PhotonMap::from_compact(photons, header.frame()),
+    ))
 }
 
 /// The three maps a render reads, from a (merged) map file of `scene`.

@@ -60,7 +60,11 @@ pub fn write_records(
     let valid = records.iter().filter(|r| is_valid(r));
     let mut hash = MapHash::default();
     let mut header = Header {
-        flags: if info.budget_bound { FLAG_BUDGET_BOUND } else { 0 },
+        flags: if info.budget_bound {
+            FLAG_BUDGET_BOUND
+        } else {
+            0
+        },
         scene_hash: info.scene_hash,
         settings: settings_of(cfg),
         shard_index: shard.index,
@@ -83,8 +87,8 @@ pub fn write_records(
         hash.add(&frame.encode(r));
         let d = (r.depth as usize).min(DEPTHS - 1);
         header.depth_photons[d] += 1;
-        for c in 0..3 {
-            header.depth_power[d][c] += r.power[c] as f64;
+        for (a, p) in header.depth_power[d].iter_mut().zip(r.power.to_array()) {
+            *a += p as f64;
         }
         header.clamped += u64::from(r.power.max_element() > info.frame.power_scale);
     }
