@@ -127,12 +127,15 @@ fn scheduler_shards_merge_to_the_single_checksum_and_render_the_same() {
     assert!(!Path::new(&out).exists());
 }
 
+/// Trace arguments, environment, and the words the error must contain.
+type Case<'a> = (&'a [&'a str], &'a [(&'a str, &'a str)], &'a str);
+
 #[test]
 fn bad_shard_requests_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.apm");
     let o = out.to_str().unwrap();
-    let cases: [(&[&str], &[(&str, &str)], &str); 4] = [
+    let cases: [Case; 4] = [
         (
             &["--mode", "density", "--shard", "0/2", "--out", o],
             &[],
