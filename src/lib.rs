@@ -157,6 +157,8 @@ pub mod error;
 #[doc(hidden)]
 pub mod experiments;
 pub mod output;
+#[cfg(feature = "embree")]
+pub mod photon_file;
 pub mod photon_map;
 pub mod prelude;
 pub mod raycast;

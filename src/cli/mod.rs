@@ -1,10 +1,13 @@
 //! Subcommands, one file each.
 
 pub mod analyze;
+pub mod assemble;
 pub mod bench;
 pub mod common;
+pub mod merge;
 pub mod render;
 pub mod scene;
+pub mod shard;
 pub mod trace;
 
 use clap::{Parser, Subcommand};
@@ -27,6 +30,10 @@ pub enum Command {
     Trace(trace::TraceArgs),
     /// Render an image: direct light by light sampling, indirect light from the photon map.
     Render(render::RenderArgs),
+    /// Merge the photon files of every shard of a run into one map file.
+    Merge(merge::MergeArgs),
+    /// Stack the tiles of a render (render --tile I/N) into one image.
+    Assemble(assemble::AssembleArgs),
     /// Benchmarks: ray throughput, the paper's Cornell experiments, the speed/accuracy trade.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -38,6 +45,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Scene(a) => scene::run(a),
         Command::Trace(a) => trace::run(a),
         Command::Render(a) => render::run(a),
+        Command::Merge(a) => merge::run(a),
+        Command::Assemble(a) => assemble::run(a),
         Command::Bench(c) => bench::run(c),
     }
 }

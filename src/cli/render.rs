@@ -4,6 +4,7 @@
 use super::common::{open_scene, progress_bar, BudgetArgs, ThreadArgs};
 use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Mode, Tracer};
+use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
     check_output_path, render, RenderConfig, RenderMaps, ToneMap, View, DEFAULT_K,
 };
@@ -58,6 +59,12 @@ pub struct RenderArgs {
     /// With --visualize-map: depth-0 photons only (the paper's primary map).
     #[arg(long, requires = "visualize_map")]
     pub primary_only: bool,
+    /// Render from this photon map file (`trace --out` or `merge`) instead of tracing.
+    #[arg(long, conflicts_with = "direct_only")]
+    pub map: Option<PathBuf>,
+    /// Render only tile I of N (bands of rows), for `assemble`.
+    #[arg(long)]
+    pub tile: Option<adaptive_pm::engine::Shard>,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -81,6 +88,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     cfg.k = args.k;
     cfg.view = view;
     cfg.seed = args.budget.seed;
+    cfg.rows = args
+        .tile
+        .map(|t| super::assemble::tile_rows(t, args.height));
     // Fail before any work: bad sizes, a missing folder, an unwritable path.
     cfg.validate()?;
     check_output_path(&args.out)?;
@@ -93,6 +103,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let bar = progress_bar(!args.json);
     let (maps, trace_s, photons) = if view == View::DirectOnly {
         (None, 0.0, 0)
+    } else if let Some(path) = &args.map {
+        let t = Instant::now();
+        let (h, maps) = pool.install(|| read_render_maps(path, &scene))?;
+        (Some(maps), t.elapsed().as_secs_f64(), h.photons as usize)
     } else {
         let t = Instant::now();
         let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt)?);
@@ -117,7 +131,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     })?;
     let render_s = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    image.write_exr(&args.out)?;
+    match (args.tile, cfg.rows) {
+        (Some(_), Some((y0, _))) => {
+            super::assemble::write_tile(&image, y0, args.height, &args.out)?
+        }
+        _ => image.write_exr(&args.out)?,
+    }
     if let Some(p) = &args.png {
         image.write_png(
             p,

@@ -20,6 +20,8 @@ pub struct TraceArgs {
     pub budget: BudgetArgs,
     #[command(flatten)]
     pub threads: ThreadArgs,
+    #[command(flatten)]
+    pub shard: super::shard::ShardArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -27,7 +29,9 @@ pub struct TraceArgs {
 
 pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     let scene = open_scene(&args.scene, args.budget.cosn)?;
-    let cfg: TraceConfig = args.budget.config(args.mode)?;
+    let mut cfg: TraceConfig = args.budget.config(args.mode)?;
+    cfg.shard = args.shard.resolve()?;
+    cfg.validate()?;
     let pool = args.threads.pool()?;
     let device = Device::new()?;
     let tracer = Tracer::new(scene.commit(&device)?);
@@ -59,7 +63,8 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         let primary = density_stats_where(&map, &points, DENSITY_K, |p| p.depth() == 0);
         (map, build_s, full, primary)
     });
-    let checksum = map.checksum();
+    let checksum =
+        super::shard::checksum_and_write(&args.shard, scene, &cfg, &map, (&report, &plans))?;
     let peak_rss_bytes = peak_rss_bytes();
     let out = (report, plans);
     let r = &out.0;
@@ -99,6 +104,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         "capped_hits": r.capped_hits,
         "density_rejected": r.density_rejected,
         "stored_power": r.stored_power,
+        "shard": cfg.shard.to_string(),
         "checksum": format!("{checksum:016x}"),
     });
     if args.json {
@@ -158,7 +164,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             r.capped_hits
         );
     }
-    println!("checksum       {checksum:016x}");
+    println!("checksum       {checksum:016x} (shard {})", cfg.shard);
     Ok(())
 }
 

@@ -58,14 +58,23 @@ pub(super) fn trace_wave<C: RayCaster>(
 /// thread count and batch size) encodes in the same frame, and the map's
 /// checksum (compact photons in tree order, and this frame) is the same.
 pub fn map_frame(scene: &Scene, plans: &[LightPlan]) -> Quantizer {
+    let (lo, hi, power_scale) = frame_inputs(scene, plans);
+    Quantizer::new(lo, hi, power_scale)
+}
+
+/// The inputs of [`map_frame`]: the scene's bounds and the power scale,
+/// [`POWER_HEADROOM`] times the largest channel of the brightest emitted
+/// photon. Photon files store these (`photon_file::canonical_frame`).
+pub fn frame_inputs(scene: &Scene, plans: &[LightPlan]) -> (glam::Vec3, glam::Vec3, f32) {
     let (lo, hi) = scene.bounds();
     let largest = scene
         .lights
         .iter()
         .zip(plans)
         .map(|(l, p)| photon_power(l, p).max_element())
+        .filter(|p| p.is_finite())
         .fold(0.0f32, f32::max);
-    Quantizer::new(lo, hi, largest * POWER_HEADROOM)
+    (lo, hi, largest * POWER_HEADROOM)
 }
 
 /// How far above the largest emitted photon a stored photon's channel may go

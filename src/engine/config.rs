@@ -1,6 +1,7 @@
 //! What a run is asked to do: the mode, the photon budget (Q or N_MAX), the
 //! bounds on splitting and on memory, and the seed.
 
+use super::shard::Shard;
 use crate::analysis::{AnalysisParams, Estimator};
 use crate::error::{Error, Result};
 
@@ -122,6 +123,8 @@ pub struct TraceConfig {
     pub density_target: DensityTarget,
     /// Photons per parallel batch; results do not depend on it.
     pub batch: usize,
+    /// Which emitted photons to trace (the whole run by default).
+    pub shard: Shard,
 }
 
 impl TraceConfig {
@@ -138,6 +141,7 @@ impl TraceConfig {
             analysis: AnalysisParams::default(),
             density_target: DensityTarget::Auto,
             batch: 1024,
+            shard: Shard::WHOLE,
         }
     }
 
@@ -164,6 +168,14 @@ impl TraceConfig {
                     format!("must be a positive number, got {d}"),
                 ));
             }
+        }
+        self.shard.validate()?;
+        if self.mode == Mode::Density && !self.shard.is_whole() {
+            return Err(Error::param(
+                "shard",
+                "density control cannot be sharded: whether a photon is stored depends on \
+                 every photon stored before it in the whole run (use classic or adaptive)",
+            ));
         }
         if self.batch == 0 {
             return Err(Error::param("batch", "must be at least 1"));

@@ -15,12 +15,13 @@
 //! ```
 
 pub mod albedo;
-mod buffer;
+pub(crate) mod buffer;
 pub mod config;
 pub mod counts;
 mod density_control;
 pub mod measure;
 pub mod report;
+pub mod shard;
 pub mod stream;
 pub mod tracer;
 pub mod wave;
@@ -29,4 +30,5 @@ pub use buffer::{map_frame, POWER_HEADROOM};
 pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig};
 pub use measure::{measure, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};
+pub use shard::Shard;
 pub use tracer::{Progress, TraceOutput, Tracer};

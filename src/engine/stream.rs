@@ -17,6 +17,7 @@
 //! depth-1 photon).
 
 use super::counts::{photon_power, LightPlan};
+use super::shard::Shard;
 use super::wave::PathState;
 use crate::rng::{hash2, Rng};
 use crate::scene::Scene;
@@ -34,11 +35,14 @@ pub(super) struct Schedule {
     next: u64,
     emitted: u64,
     wave: usize,
+    /// Which of each light's photon ids this run emits.
+    shard: Shard,
 }
 
 impl Schedule {
-    pub fn new(emitted: u64, max_depth: u32, whole_depths: bool) -> Self {
+    pub fn new(emitted: u64, max_depth: u32, whole_depths: bool, shard: Shard) -> Self {
         Schedule {
+            shard,
             pending: vec![Vec::new(); max_depth as usize + 2],
             next: 0,
             emitted,
@@ -74,7 +78,7 @@ impl Schedule {
             Some(d) if self.wave != usize::MAX => d,
             _ if self.next < self.emitted => {
                 let n = (self.emitted - self.next).min(self.wave as u64);
-                emit(scene, plans, seed, epsilon, self.next, n, out);
+                emit(scene, plans, self.shard, seed, epsilon, self.next, n, out);
                 self.next += n;
                 return Some(0);
             }
@@ -88,10 +92,13 @@ impl Schedule {
 }
 
 /// Photons `first .. first + n` of the run's emission order: every photon of
-/// light 0, then of light 1, and so on.
+/// light 0 (of `shard`'s ids), then of light 1, and so on. A photon's key
+/// is its id's, whichever shard emits it.
+#[allow(clippy::too_many_arguments)]
 fn emit(
     scene: &Scene,
     plans: &[LightPlan],
+    shard: Shard,
     seed: u64,
     epsilon: f32,
     first: u64,
@@ -101,12 +108,15 @@ fn emit(
     let mut base = 0u64;
     let end = first + n;
     for (l, (light, plan)) in scene.lights.iter().zip(plans).enumerate() {
-        let (lo, hi) = (first.max(base), end.min(base + plan.photons));
+        let ids = shard.range(plan.photons);
+        let count = ids.end - ids.start;
+        let (lo, hi) = (first.max(base), end.min(base + count));
         if lo < hi {
             let power = photon_power(light, plan);
             let light_key = hash2(seed, l as u64);
-            // Indexed: par_extend keeps photon i at position i - lo.
-            out.par_extend((lo - base..hi - base).into_par_iter().map(|i| {
+            // Indexed: par_extend keeps the order of the ids.
+            let (a, b) = (lo - base + ids.start, hi - base + ids.start);
+            out.par_extend((a..b).into_par_iter().map(|i| {
                 let key = hash2(light_key, i);
                 let mut rng = Rng::new(key);
                 let e = light.sample(rng.next_f32(), rng.next_2d(), rng.next_2d());
@@ -118,6 +128,6 @@ fn emit(
                 }
             }));
         }
-        base += plan.photons;
+        base += count;
     }
 }

@@ -228,9 +228,11 @@ impl<C: RayCaster> Tracer<C> {
         let (plans, tables) = self.analyse(cfg)?;
         let n_max = cfg.n_max();
         // Checked (issue 12): two lights of ~2^63 photons each overflowed u64.
+        // The budget is per shard: only this shard's photons are traced.
+        let shard = cfg.settings().shard;
         let emitted: u64 = plans
             .iter()
-            .try_fold(0u64, |a, p| a.checked_add(p.photons))
+            .try_fold(0u64, |a, p| a.checked_add(shard.len_of(p.photons)))
             .unwrap_or(u64::MAX);
         let budget_bytes = cfg.memory_budget();
         let max_photons = budget_bytes / BYTES_PER_STORED_PHOTON;
@@ -281,7 +283,7 @@ impl<C: RayCaster> Tracer<C> {
             let guess = emitted.saturating_mul(3).min(max_photons) as usize;
             reserve(&mut photons, guess, budget_bytes)?;
         }
-        let mut schedule = Schedule::new(emitted, cfg.max_depth(), density.is_some());
+        let mut schedule = Schedule::new(emitted, cfg.max_depth(), density.is_some(), shard);
         let mut wave: Vec<PathState> = Vec::new();
         let mut splitting = cfg.mode() == Mode::Adaptive;
         // What the run holds, in stored photons' worth of memory: the buffer

@@ -146,6 +146,11 @@ impl PhotonMap {
         (self.photons, self.quant)
     }
 
+    /// The compact photons, in tree order (their split-axis bits set).
+    pub fn compact_photons(&self) -> &[CompactPhoton] {
+        &self.photons
+    }
+
     /// Number of photons.
     pub fn len(&self) -> usize {
         self.photons.len()

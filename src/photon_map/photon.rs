@@ -129,6 +129,19 @@ impl CompactPhoton {
         (self.pos, ((self.power as u64) << 32) | self.dir as u64)
     }
 
+    /// The photon whose [`CompactPhoton::bits`] are `(a, b)`, without a kd-tree split
+    /// axis (photon files store photons this way).
+    #[inline]
+    pub(crate) fn from_bits(a: u64, b: u64) -> CompactPhoton {
+        let mut p = CompactPhoton {
+            pos: a,
+            power: (b >> 32) as u32,
+            dir: b as u32,
+        };
+        p.dir &= !(3 << AXIS_SHIFT);
+        p
+    }
+
     /// A total order whose first key is the coordinate on `axis`, then all 16 bytes:
     /// equal means bitwise equal, which is what makes the build canonical. (Photons
     /// being partitioned have no split axis written yet, so the axis bits are 0.)

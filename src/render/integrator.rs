@@ -195,7 +195,10 @@ pub fn render(
             "this view reads the photon map; pass one or use the direct-only view",
         ));
     }
-    let mut image = Image::new(cfg.width, cfg.height)?;
+    // A tile (`cfg.rows`) is an image of its rows only; pixels keep their
+    // whole-image index, so their samples are the whole image's.
+    let (y0, y1) = cfg.rows.unwrap_or((0, cfg.height));
+    let mut image = Image::new(cfg.width, y1 - y0)?;
     let camera = cfg.camera_for(scene)?;
     let rays = CameraRays::new(&camera, cfg.width, cfg.height);
     let ctx = Ctx {
@@ -212,7 +215,7 @@ pub fn render(
         show_emitters: cfg.show_emitters,
     };
     let width = cfg.width as usize;
-    let rows = cfg.height as u64;
+    let rows = (y1 - y0) as u64;
     let done = AtomicU64::new(0);
     let inv_spp = 1.0 / cfg.spp as f32;
     image
@@ -220,6 +223,7 @@ pub fn render(
         .par_chunks_mut(width)
         .enumerate()
         .for_each(|(y, row)| {
+            let y = y + y0 as usize;
             let mut scratch = Vec::with_capacity(cfg.k);
             for (x, px) in row.iter_mut().enumerate() {
                 let pixel = (y * width + x) as u64;

@@ -147,6 +147,9 @@ pub struct RenderConfig {
     /// every mode, but the aliasing of a bright light's edges would dominate
     /// an image RMSE.
     pub show_emitters: bool,
+    /// Render only rows `start..end` of the image (a tile, `render --tile`);
+    /// each pixel is the same as in the whole image. `None`: every row.
+    pub rows: Option<(u32, u32)>,
 }
 
 impl RenderConfig {
@@ -163,6 +166,7 @@ impl RenderConfig {
             seed: 1,
             camera: None,
             show_emitters: true,
+            rows: None,
         }
     }
 
@@ -189,6 +193,14 @@ impl RenderConfig {
                 "k",
                 format!("must be in 1..=10000, got {}", self.k),
             ));
+        }
+        if let Some((a, b)) = self.rows {
+            if a >= b || b > self.height {
+                return Err(Error::param(
+                    "rows",
+                    format!("{a}..{b} is not a non-empty range of 0..{}", self.height),
+                ));
+            }
         }
         if let Some(r) = self.max_radius {
             if !(r.is_finite() && r > 0.0) {

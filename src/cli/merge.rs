@@ -1,0 +1,61 @@
+//! `adaptive-pm merge SHARD.apm... --out MAP.apm [--json]`: every shard of one
+//! run into one map file, streamed (see `adaptive_pm::photon_file::merge`).
+
+use adaptive_pm::photon_file::merge;
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `merge`.
+#[derive(clap::Args, Debug)]
+pub struct MergeArgs {
+    /// The shards' photon files (every shard of the run, each once, any order).
+    #[arg(required = true)]
+    pub shards: Vec<PathBuf>,
+    /// The merged map file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: MergeArgs) -> anyhow::Result<()> {
+    if args.shards.iter().any(|s| s == &args.out) {
+        anyhow::bail!("--out {} is also an input shard", args.out.display());
+    }
+    let t = Instant::now();
+    let m = merge(&args.shards, &args.out)?;
+    let merge_s = t.elapsed().as_secs_f64();
+    let h = &m.header;
+    let budget_bound = h.flags & adaptive_pm::photon_file::FLAG_BUDGET_BOUND != 0;
+    if args.json {
+        println!(
+            "{}",
+            json!({
+                "shards": h.merged_from,
+                "photons": h.photons,
+                "emitted": h.emitted,
+                "bytes": std::fs::metadata(&args.out).map(|m| m.len()).unwrap_or(0),
+                "clamped": h.clamped,
+                "budget_bound": budget_bound,
+                "merge_s": merge_s,
+                "checksum": format!("{:016x}", m.checksum),
+                "out": args.out,
+            })
+        );
+        return Ok(());
+    }
+    println!(
+        "merged {} shards: {} photons from {} emitted, {:.3} s",
+        h.merged_from, h.photons, h.emitted, merge_s
+    );
+    if budget_bound {
+        println!(
+            "note: the memory budget bound in a shard: the map differs from an unbounded run's"
+        );
+    }
+    println!("checksum       {:016x}", m.checksum);
+    println!("wrote {}", args.out.display());
+    Ok(())
+}

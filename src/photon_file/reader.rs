@@ -1,0 +1,199 @@
+//! Reading a photon file as a stream of chunks, checking its size up front and
+//! its checksum at the end.
+
+use super::frame::ByteHash;
+use super::header::{Header, HEADER_SIZE, TRAILER_MAGIC};
+use super::{PHOTON_SIZE, TRAILER_SIZE};
+use crate::error::{Error, Result};
+use crate::photon_map::{CompactPhoton, PhotonMap};
+use std::fs::File;
+use std::io::{BufReader, Read};
+use std::path::{Path, PathBuf};
+
+/// Photons per chunk (1 MiB).
+const CHUNK_PHOTONS: u64 = 1 << 16;
+
+/// An open photon file, read chunk by chunk.
+#[derive(Debug)]
+pub struct PhotonReader {
+    path: PathBuf,
+    file: BufReader<File>,
+    header: Header,
+    left: u64,
+    hash: ByteHash,
+    buf: Vec<u8>,
+    verified: bool,
+}
+
+impl PhotonReader {
+    /// Opens `path` and checks its header and its length (a truncated or
+    /// padded file is refused here, before any photon is read).
+    ///
+    /// # Errors
+    /// [`Error::Io`] when it cannot be read; [`Error::InvalidParameter`]
+    /// (`photon file`) for a bad header or a wrong length.
+    pub fn open(path: &Path) -> Result<Self> {
+        let io = |source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let file = File::open(path).map_err(io)?;
+        let meta = file.metadata().map_err(io)?;
+        if !meta.is_file() {
+            return Err(io(std::io::Error::other("not a regular file")));
+        }
+        let bad = |why: String| Error::param("photon file", format!("{}: {why}", path.display()));
+        let len = meta.len();
+        if len < HEADER_SIZE as u64 + TRAILER_SIZE {
+            return Err(bad(format!("truncated ({len} bytes, less than a header)")));
+        }
+        let mut file = BufReader::with_capacity(1 << 20, file);
+        let mut hb = vec![0u8; HEADER_SIZE];
+        file.read_exact(&mut hb).map_err(io)?;
+        let header = Header::from_bytes(&hb).map_err(|e| bad(e.to_string()))?;
+        let expected = header
+            .photons
+            .checked_mul(PHOTON_SIZE)
+            .and_then(|b| b.checked_add(HEADER_SIZE as u64 + TRAILER_SIZE));
+        if expected != Some(len) {
+            return Err(bad(format!(
+                "{len} bytes, but its header announces {} photons ({} bytes): truncated or corrupt",
+                header.photons,
+                expected.map_or("too many".into(), |e| e.to_string())
+            )));
+        }
+        let mut hash = ByteHash::default();
+        hash.update(&hb);
+        Ok(PhotonReader {
+            path: path.to_path_buf(),
+            file,
+            left: header.photons,
+            header,
+            hash,
+            buf: Vec::new(),
+            verified: false,
+        })
+    }
+
+    /// The header.
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    /// The next chunk of raw photon bytes (16 per photon, little-endian), or
+    /// `None` once every photon has been read and the checksum matched.
+    ///
+    /// # Errors
+    /// [`Error::Io`] on a read failure; [`Error::InvalidParameter`] when the
+    /// checksum or the trailer does not match (a corrupt file).
+    pub fn next_bytes(&mut self) -> Result<Option<&[u8]>> {
+        let io = |source| Error::Io {
+            path: self.path.clone(),
+            source,
+        };
+        if self.left == 0 {
+            if !self.verified {
+                self.verify_trailer()?;
+            }
+            return Ok(None);
+        }
+        let n = self.left.min(CHUNK_PHOTONS);
+        self.buf.resize((n * PHOTON_SIZE) as usize, 0);
+        self.file.read_exact(&mut self.buf).map_err(io)?;
+        self.hash.update(&self.buf);
+        self.left -= n;
+        Ok(Some(&self.buf))
+    }
+
+    fn verify_trailer(&mut self) -> Result<()> {
+        let mut t = [0u8; TRAILER_SIZE as usize];
+        self.file.read_exact(&mut t).map_err(|source| Error::Io {
+            path: self.path.clone(),
+            source,
+        })?;
+        self.buf = Vec::new();
+        let stored = u64::from_le_bytes([t[8], t[9], t[10], t[11], t[12], t[13], t[14], t[15]]);
+        if t[..8] != TRAILER_MAGIC || stored != self.hash.value() {
+            return Err(Error::param(
+                "photon file",
+                format!(
+                    "{}: checksum mismatch (the file is corrupt)",
+                    self.path.display()
+                ),
+            ));
+        }
+        self.verified = true;
+        Ok(())
+    }
+}
+
+/// Splits raw photon bytes into compact photons.
+pub(crate) fn photons_of(bytes: &[u8]) -> impl Iterator<Item = CompactPhoton> + '_ {
+    bytes.chunks_exact(16).map(|c| {
+        let w = |i: usize| {
+            let mut a = [0u8; 8];
+            a.copy_from_slice(&c[i..i + 8]);
+            u64::from_le_bytes(a)
+        };
+        CompactPhoton::from_bits(w(0), w(8))
+    })
+}
+
+/// Reads a whole photon file into a kd-tree photon map, keeping the photons
+/// that `keep` accepts, checking the checksum.
+///
+/// # Errors
+/// As [`PhotonReader::open`] and [`PhotonReader::next_bytes`];
+/// [`Error::InvalidParameter`] for a map over `u32::MAX` photons.
+pub fn read_map(path: &Path, keep: impl Fn(&CompactPhoton) -> bool) -> Result<(Header, PhotonMap)> {
+    let mut r = PhotonReader::open(path)?;
+    let header = r.header().clone();
+    if header.photons > u32::MAX as u64 {
+        return Err(Error::param(
+            "photon file",
+            format!("{} photons: a map holds at most u32::MAX", header.photons),
+        ));
+    }
+    let mut photons = Vec::with_capacity(header.photons as usize);
+    while let Some(bytes) = r.next_bytes()? {
+        photons.extend(photons_of(bytes).filter(|p| keep(p)));
+    }
+    Ok((
+        header.clone(),
+        PhotonMap::from_compact(photons, header.frame()),
+    ))
+}
+
+/// The three maps a render reads, from a (merged) map file of `scene`.
+///
+/// # Errors
+/// As [`read_map`]; [`Error::InvalidParameter`] when the file was traced in
+/// another scene.
+pub fn read_render_maps(
+    path: &Path,
+    scene: &crate::scene::Scene,
+) -> Result<(Header, crate::render::RenderMaps)> {
+    let header = PhotonReader::open(path)?.header().clone();
+    if header.scene_hash != super::scene_hash(scene) {
+        return Err(Error::param(
+            "photon file",
+            format!("{} was traced in another scene", path.display()),
+        ));
+    }
+    let (_, full) = read_map(path, |_| true)?;
+    let pick = |keep: fn(u8) -> bool| {
+        let photons: Vec<CompactPhoton> = full
+            .photons
+            .iter()
+            .map(|p| CompactPhoton::from_bits(p.bits().0, p.bits().1))
+            .filter(|p| keep(p.depth()))
+            .collect();
+        PhotonMap::from_compact(photons, header.frame())
+    };
+    let maps = crate::render::RenderMaps {
+        indirect: pick(|d| d >= 1),
+        primary: pick(|d| d == 0),
+        full,
+    };
+    Ok((header, maps))
+}
