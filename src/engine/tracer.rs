@@ -40,13 +40,16 @@ fn split_bound(queue: &[PathState], max_light_luminance: f32, n_max: u64, cap: u
     per_chunk.iter().sum()
 }
 
+/// A material's alpha_D table (`None` outside adaptive mode and for delta BRDFs).
+type MaterialTable = Option<Arc<DirectionalityTable>>;
+
 /// alpha_D tables for the materials the scene's meshes use (adaptive mode
 /// only): only what the scene needs is analysed.
 fn material_tables(
     scene: &Scene,
     cache: &mut AnalysisCache,
     mode: Mode,
-) -> Result<Vec<Option<Arc<DirectionalityTable>>>> {
+) -> Result<Vec<MaterialTable>> {
     let mut tables = vec![None; scene.materials.len()];
     if mode != Mode::Adaptive {
         return Ok(tables);
@@ -195,10 +198,7 @@ impl<C: RayCaster> Tracer<C> {
 
     /// Emission plans and the alpha_D tables of the run, from the cache
     /// (held only while analysing).
-    fn analyse(
-        &self,
-        cfg: &CheckedConfig,
-    ) -> Result<(Vec<LightPlan>, Vec<Option<Arc<DirectionalityTable>>>)> {
+    fn analyse(&self, cfg: &CheckedConfig) -> Result<(Vec<LightPlan>, Vec<MaterialTable>)> {
         let mut guard = self.lock_cache();
         let stale = guard
             .as_ref()
