@@ -301,3 +301,93 @@ fn any_n_max_over_two_lights_traces_or_is_refused() {
         })
         .unwrap();
 }
+
+/// A structure-aware mutation run (no libFuzzer needed): numbers of the
+/// regression files replaced by hostile values, spans deleted or duplicated.
+/// Every mutant loads or fails with an error; a panic fails the test and
+/// prints the mutant. `HOSTILE_MUTANTS` sets the count (default 2000).
+#[test]
+#[ignore = "long: run with --ignored (the fuzz target in fuzz/ is the main tool)"]
+fn mutants_of_the_regression_files_never_panic() {
+    use adaptive_pm::rng::Rng;
+    let count: usize = std::env::var("HOSTILE_MUTANTS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2000);
+    let seeds: Vec<String> = std::fs::read_dir(dir())
+        .unwrap()
+        .filter_map(|e| {
+            let p = e.unwrap().path();
+            (p.extension()? == "gltf").then(|| std::fs::read_to_string(p).unwrap())
+        })
+        .collect();
+    let hostile = [
+        "0",
+        "-1",
+        "1e39",
+        "-1e39",
+        "4294967295",
+        "2147483648",
+        "99",
+        "1e20",
+        "3",
+        "5126",
+        "5121",
+        "0.0",
+        "[]",
+        "{}",
+        "\"x\"",
+        "null",
+    ];
+    let tmp = tempfile::tempdir().unwrap();
+    let target = tmp.path().join("m.gltf");
+    let mut rng = Rng::new(12);
+    std::panic::set_hook(Box::new(|_| {}));
+    for i in 0..count {
+        let mut s = seeds[i % seeds.len()].clone().into_bytes();
+        for _ in 0..1 + (rng.next_f32() * 3.0) as usize {
+            let at = (rng.next_f32() * s.len() as f32) as usize % s.len().max(1);
+            match (rng.next_f32() * 3.0) as usize {
+                0 => {
+                    // Replace the number starting at or after `at`.
+                    if let Some(start) = s[at..]
+                        .iter()
+                        .position(|c| c.is_ascii_digit())
+                        .map(|k| k + at)
+                    {
+                        let end = s[start..]
+                            .iter()
+                            .position(|c| !(c.is_ascii_digit() || b".eE+-".contains(c)))
+                            .map_or(s.len(), |k| k + start);
+                        let v = hostile
+                            [(rng.next_f32() * hostile.len() as f32) as usize % hostile.len()];
+                        s.splice(start..end, v.bytes());
+                    }
+                }
+                1 => {
+                    let end = (at + (rng.next_f32() * 40.0) as usize).min(s.len());
+                    s.drain(at..end);
+                }
+                _ => {
+                    let end = (at + (rng.next_f32() * 40.0) as usize).min(s.len());
+                    let dup: Vec<u8> = s[at..end].to_vec();
+                    s.splice(at..at, dup);
+                }
+            }
+        }
+        std::fs::write(&target, &s).unwrap();
+        let r = std::panic::catch_unwind(|| {
+            if let Ok(scene) = Scene::load(&target) {
+                assert!(scene.lights().iter().all(|l| l.power().is_finite()));
+                let _ = scene.ray_epsilon();
+            }
+        });
+        if r.is_err() {
+            let keep = std::env::temp_dir().join(format!("hostile-mutant-{i}.gltf"));
+            std::fs::write(&keep, &s).unwrap();
+            let _ = std::panic::take_hook();
+            panic!("mutant {i} panicked; kept as {}", keep.display());
+        }
+    }
+    let _ = std::panic::take_hook();
+}
