@@ -90,6 +90,9 @@ pub fn run(args: CornellArgs) -> anyhow::Result<()> {
         density_target: args.density_target,
     };
     cfg.validate()?;
+    // A bad scene name fails here, before the output folder is made.
+    adaptive_pm::scene::Scene::open(&cfg.scene)
+        .with_context(|| format!("--scene `{}`", cfg.scene))?;
     let out_dir = args.out.clone().unwrap_or_else(|| {
         let t = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
