@@ -39,7 +39,15 @@ fn json_prints_one_object_with_the_runs() {
         let mesh = r["max_density_primary_mesh"].as_str().unwrap();
         let mesh = mesh.split('#').next().unwrap();
         assert!(
-            ["floor", "ceiling", "back_wall", "green_wall", "red_wall", "light"].contains(&mesh),
+            [
+                "floor",
+                "ceiling",
+                "back_wall",
+                "green_wall",
+                "red_wall",
+                "light"
+            ]
+            .contains(&mesh),
             "{mesh}"
         );
         let at = r["max_density_primary_at"].as_array().unwrap();
@@ -98,7 +106,11 @@ fn scene_from_a_file_is_named_in_the_output() {
     let s: serde_json::Value = serde_json::from_str(&summary).unwrap();
     assert_eq!(s["results"]["scene"], file);
     let runs = std::fs::read_to_string(dir.path().join("runs.csv")).unwrap();
-    assert!(runs.lines().next().unwrap().contains("max_density_primary_mesh"));
+    assert!(runs
+        .lines()
+        .next()
+        .unwrap()
+        .contains("max_density_primary_mesh"));
     assert!(dir.path().join("claims.md").exists());
 }
 

@@ -22,7 +22,7 @@
 //!   mirror direction, and the normalisation is the BRDF's albedo.
 //!
 //! Both are clamped to [`alpha_min`, 1]. Documented special cases: a delta
-//! BRDF (mirror) gets `alpha_min` without sampling; an all-zero function
+//! BRDF (mirror) gets `alpha_min` and a Lambert BRDF 1, both without sampling; an all-zero function
 //! (albedo 0, or an incident direction at or below the horizon) is reported
 //! diffuse, `alpha_D = 1` with no peaks, the limit of a vanishing diffuse
 //! albedo (its photon count is 0 anyway through `alpha_E`).
@@ -257,6 +257,11 @@ pub fn analyze_brdf_at(
             "cos_theta_in",
             format!("must be in [0, 1], got {cos_theta_in}"),
         ));
+    }
+    if matches!(b, Brdf::Lambert(_)) {
+        // Constant over the hemisphere: variance 0, diffuse, by definition;
+        // sampling it (3072 samples per incident angle) would only confirm it.
+        return Ok(Directionality::diffuse(0.0, Duration::ZERO));
     }
     if b.is_delta() {
         let mut d = Directionality::diffuse(f32::INFINITY, Duration::ZERO);
