@@ -2,7 +2,7 @@
 //! (clustering + solid angles) separately, per function, plus whole BRDF
 //! tables. Targets: one analysis < 1 ms, one table < 20 ms, on one core.
 
-use adaptive_pm::analysis::sampling::{sample, Target};
+use adaptive_pm::analysis::sampling::{sample, Placement, Target};
 use adaptive_pm::analysis::{analyze_brdf, find_peaks, AnalysisParams, Estimator};
 use adaptive_pm::brdf::{Brdf, CookTorrance, Phong};
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
@@ -35,9 +35,9 @@ fn bench(c: &mut Criterion) {
             }
         }
         g.bench_function(format!("sample/{name}"), |bn| {
-            bn.iter(|| sample(black_box(target(&b, wi, n)), &p))
+            bn.iter(|| sample(black_box(target(&b, wi, n)), Placement::Stratified, &p))
         });
-        let set = sample(target(&b, wi, n), &p);
+        let set = sample(target(&b, wi, n), Placement::Stratified, &p);
         g.bench_function(format!("cluster/{name}"), |bn| {
             bn.iter(|| find_peaks(black_box(&set.dirs), &set.values, set.drawn, &p))
         });

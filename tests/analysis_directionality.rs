@@ -292,4 +292,20 @@ fn table_interpolates_direct_analyses_and_cache_runs_each_once() {
     assert_eq!(a, cache.emitter(&CosN::new(10.0).unwrap()).unwrap());
     cache.emitter(&CosN::new(11.0).unwrap()).unwrap();
     assert_eq!(cache.analyses(), 3);
+    // keyed by the exact bits: the next float up is another function, -0.0
+    // and 0.0 are one
+    let next: Brdf = Phong::new(
+        Vec3::splat(0.1),
+        Vec3::splat(0.8),
+        f32::from_bits(30.0f32.to_bits() + 1),
+    )
+    .unwrap()
+    .into();
+    assert_ne!(next.param_bits(), b.param_bits());
+    cache.brdf(&next).unwrap();
+    assert_eq!(cache.analyses(), 4);
+    cache.emitter(&CosN::new(0.0).unwrap()).unwrap();
+    cache.emitter(&CosN::new(-0.0).unwrap()).unwrap();
+    assert_eq!(cache.analyses(), 5);
+    assert_eq!(cache.len(), 5);
 }

@@ -3,10 +3,14 @@
 measured Cornell box (both blocks, the 130 x 105 ceiling light) as glTF 2.0 with
 an embedded buffer. Run from the repository root: python3 tools/make_cornell.py
 
+With --empty it writes assets/cornell_empty.gltf instead: the same five walls,
+light, albedos and camera without the blocks (12 triangles), the paper's test
+scene (§3.2: "une source lumineuse et des parois idéalement diffuses").
+
 The light sits 0.1 below the ceiling (y = 548.7) so the two never coincide,
 and faces down. The cos^n exponent of the light is the material's
 extras.cosn (0 = diffuse)."""
-import base64, json, math, struct
+import base64, json, math, struct, sys
 
 QUADS = {
     "floor": ("white", [(552.8, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 559.2), (549.6, 0.0, 559.2)]),
@@ -45,8 +49,10 @@ MAT_INDEX = {m["name"]: i for i, m in enumerate(MATERIALS)}
 
 
 def main():
+    empty = "--empty" in sys.argv[1:]
     meshes = [(name, mat, [quad]) for name, (mat, quad) in QUADS.items()]
-    meshes += [(name, "white", quads) for name, quads in BLOCKS.items()]
+    if not empty:
+        meshes += [(name, "white", quads) for name, quads in BLOCKS.items()]
     blob = bytearray()
     accessors, views, gl_meshes, nodes = [], [], [], []
     for name, mat, quads in meshes:
@@ -75,7 +81,7 @@ def main():
         "asset": {"version": "2.0", "generator": "adaptive-pm tools/make_cornell.py"},
         "extensionsUsed": ["KHR_materials_emissive_strength"],
         "scene": 0,
-        "scenes": [{"name": "cornell_box", "nodes": list(range(len(nodes)))}],
+        "scenes": [{"name": "cornell_empty" if empty else "cornell_box", "nodes": list(range(len(nodes)))}],
         "nodes": nodes,
         "meshes": gl_meshes,
         "materials": MATERIALS,
@@ -84,7 +90,8 @@ def main():
         "bufferViews": views,
         "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(blob)).decode()}],
     }
-    with open("assets/cornell_box.gltf", "w") as f:
+    out = "assets/cornell_empty.gltf" if empty else "assets/cornell_box.gltf"
+    with open(out, "w") as f:
         json.dump(doc, f, indent=1)
         f.write("\n")
 

@@ -1,15 +1,15 @@
 //! Each distinct emission profile and BRDF is analysed once.
 //!
 //! The cache is keyed by the function's exact parameter bits
-//! ([`crate::brdf::Brdf::key`], the `cos^n` exponent's bits) and the
-//! estimator; its [`AnalysisParams`] are fixed at construction, so a key
+//! ([`crate::brdf::Brdf::param_bits`], the `cos^n` exponent's bits), not by
+//! a hash of them, so two distinct functions never share an entry; the
+//! estimator and the [`AnalysisParams`] are fixed at construction, so a key
 //! always means the same answer.
 
 use super::{analyze_brdf, analyze_emitter, AnalysisParams, DirectionalityTable, Estimator};
 use crate::brdf::Brdf;
 use crate::emitter::CosN;
 use crate::error::Result;
-use crate::rng::hash2;
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -18,8 +18,9 @@ use std::sync::Arc;
 pub struct AnalysisCache {
     params: AnalysisParams,
     estimator: Estimator,
-    emitters: HashMap<u64, f32>,
-    brdfs: HashMap<u64, Arc<DirectionalityTable>>,
+    /// By the exponent's bits (-0.0 folded into 0.0).
+    emitters: HashMap<u32, f32>,
+    brdfs: HashMap<(u8, [u32; 7]), Arc<DirectionalityTable>>,
     analyses: usize,
 }
 
@@ -54,10 +55,7 @@ impl AnalysisCache {
     /// # Errors
     /// Whatever [`analyze_emitter`] returns (nothing is cached then).
     pub fn emitter(&mut self, e: &CosN) -> Result<f32> {
-        let key = hash2(
-            hash2(0xE, e.exponent().to_bits() as u64),
-            self.estimator as u64,
-        );
+        let key = (e.exponent() + 0.0).to_bits();
         if let Some(&a) = self.emitters.get(&key) {
             return Ok(a);
         }
@@ -72,7 +70,7 @@ impl AnalysisCache {
     /// # Errors
     /// Whatever [`analyze_brdf`] returns (nothing is cached then).
     pub fn brdf(&mut self, b: &Brdf) -> Result<Arc<DirectionalityTable>> {
-        let key = hash2(b.key(), self.estimator as u64);
+        let key = b.param_bits();
         if let Some(t) = self.brdfs.get(&key) {
             return Ok(Arc::clone(t));
         }

@@ -5,12 +5,16 @@
 //! The analysed function is the emitter's radiance `cos^n` or a BRDF's
 //! `f_r(wi, .)` (luminance of RGB; `f`, not `f cos`), normalised to unit
 //! integral over the hemisphere. Two estimators:
-//! - [`Estimator::Paper`] (default): [`sampling`] (importance samples +
-//!   equal-solid-angle strata) → variance of the strata against
+//! - [`Estimator::Paper`] (default): [`sampling`] (importance samples placed
+//!   by a stratified low-discrepancy set shared by every function, the
+//!   paper's "échantillonnage préférentiel et stratifié", + equal-solid-angle
+//!   strata) → variance of the strata against
 //!   `variance_threshold` (below: `alpha_D = 1`) → [`cluster`] (greedy
 //!   complete linkage above the diffuse level, O(m^2)) → peaks holding at
 //!   least `min_peak_fraction` of the samples → `alpha_D = sum omega_i / 2 pi`
 //!   from [`solid_angle`];
+//! - [`Estimator::PaperIid`]: the same with independent random importance
+//!   samples per function (kept for comparison; not monotone in `n`);
 //! - [`Estimator::PeakDensity`]: `alpha_D = 1 / (pi max p)` with `p` the
 //!   normalised density of the re-emitted direction (`f cos / integral f cos`):
 //!   closed form `2 / (n + 2)` for `cos^n`; for a BRDF the maximum is taken
@@ -18,7 +22,7 @@
 //!   mirror direction, and the normalisation is the BRDF's albedo.
 //!
 //! Both are clamped to [`alpha_min`, 1]. Documented special cases: a delta
-//! BRDF (mirror) gets `alpha_min` without sampling; an all-zero function
+//! BRDF (mirror) gets `alpha_min` and a Lambert BRDF 1, both without sampling; an all-zero function
 //! (albedo 0, or an incident direction at or below the horizon) is reported
 //! diffuse, `alpha_D = 1` with no peaks, the limit of a vanishing diffuse
 //! albedo (its photon count is 0 anyway through `alpha_E`).
@@ -44,18 +48,39 @@ use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use crate::sampling::luminance;
 use glam::Vec3;
-use sampling::{SampleSet, Target};
+use sampling::{Placement, Target};
 use std::time::{Duration, Instant};
 
 /// Which `alpha_D` estimator to use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Estimator {
-    /// The paper's: variance test, clustering, peak solid angles.
+    /// The paper's: variance test, clustering, peak solid angles, on
+    /// stratified importance samples ([`sampling::Placement::Stratified`]).
     #[default]
     Paper,
+    /// The paper's method on i.i.d. importance samples
+    /// ([`sampling::Placement::Iid`]), for comparison only.
+    PaperIid,
     /// `1 / (pi max p)`: keeps the peak photon density of a function equal
     /// to a diffuse one's by construction.
     PeakDensity,
+}
+
+impl Estimator {
+    /// Every estimator, in the order the CLI lists them.
+    pub const ALL: [Estimator; 3] = [
+        Estimator::Paper,
+        Estimator::PaperIid,
+        Estimator::PeakDensity,
+    ];
+
+    /// How this estimator places its importance samples.
+    pub fn placement(self) -> Placement {
+        match self {
+            Estimator::PaperIid => Placement::Iid,
+            Estimator::Paper | Estimator::PeakDensity => Placement::Stratified,
+        }
+    }
 }
 
 impl std::str::FromStr for Estimator {
@@ -63,10 +88,11 @@ impl std::str::FromStr for Estimator {
     fn from_str(s: &str) -> Result<Self> {
         match s {
             "paper" => Ok(Estimator::Paper),
+            "paper-iid" => Ok(Estimator::PaperIid),
             "peak" | "peak-density" => Ok(Estimator::PeakDensity),
             _ => Err(Error::param(
                 "directionality",
-                format!("expected `paper` or `peak`, got `{s}`"),
+                format!("expected `paper`, `paper-iid` or `peak`, got `{s}`"),
             )),
         }
     }
@@ -76,6 +102,7 @@ impl std::fmt::Display for Estimator {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             Estimator::Paper => "paper",
+            Estimator::PaperIid => "paper-iid",
             Estimator::PeakDensity => "peak",
         })
     }
@@ -151,17 +178,27 @@ pub fn find_peaks(dirs: &[Vec3], values: &[f32], drawn: usize, p: &AnalysisParam
         .collect()
 }
 
-fn paper(set: &SampleSet, sample_time: Duration, p: &AnalysisParams) -> Directionality {
+/// The paper's estimate on each of the `p.sets` sample sets, averaged;
+/// the peaks listed are those of set 0.
+fn paper(target: Target<'_>, est: Estimator, p: &AnalysisParams) -> Directionality {
+    let t = Instant::now();
+    let set = sampling::sample(target, est.placement(), p);
+    let sample_time = t.elapsed();
     if set.integral <= 0.0 || set.variance < p.variance_threshold {
         return Directionality::diffuse(set.variance, sample_time);
     }
     let t = Instant::now();
-    let peaks = find_peaks(&set.dirs, &set.values, set.drawn, p);
-    let omega: f32 = peaks.iter().map(|pk| pk.solid_angle).sum();
-    let alpha_d = (omega / (2.0 * std::f32::consts::PI)).clamp(p.alpha_min, 1.0);
+    let (mut sum, mut first, mut start) = (0.0f64, None, 0);
+    for &end in &set.set_ends {
+        let peaks = find_peaks(&set.dirs[start..end], &set.values[start..end], set.drawn, p);
+        start = end;
+        let omega: f32 = peaks.iter().map(|pk| pk.solid_angle).sum();
+        sum += (omega / (2.0 * std::f32::consts::PI)).clamp(p.alpha_min, 1.0) as f64;
+        first.get_or_insert(peaks);
+    }
     Directionality {
-        alpha_d,
-        peaks,
+        alpha_d: ((sum / p.sets as f64) as f32).clamp(p.alpha_min, 1.0),
+        peaks: first.unwrap_or_default(),
         variance: set.variance,
         sample_time,
         cluster_time: t.elapsed(),
@@ -191,11 +228,7 @@ pub fn analyze_emitter(e: &CosN, est: Estimator, p: &AnalysisParams) -> Result<D
             d.alpha_d = peak_alpha(max_p, p);
             Ok(d)
         }
-        Estimator::Paper => {
-            let t = Instant::now();
-            let set = sampling::sample(Target::CosN(n), p);
-            Ok(paper(&set, t.elapsed(), p))
-        }
+        Estimator::Paper | Estimator::PaperIid => Ok(paper(Target::CosN(n), est, p)),
     }
 }
 
@@ -225,6 +258,11 @@ pub fn analyze_brdf_at(
             format!("must be in [0, 1], got {cos_theta_in}"),
         ));
     }
+    if matches!(b, Brdf::Lambert(_)) {
+        // Constant over the hemisphere: variance 0, diffuse, by definition;
+        // sampling it (3072 samples per incident angle) would only confirm it.
+        return Ok(Directionality::diffuse(0.0, Duration::ZERO));
+    }
     if b.is_delta() {
         let mut d = Directionality::diffuse(f32::INFINITY, Duration::ZERO);
         d.alpha_d = p.alpha_min;
@@ -232,23 +270,21 @@ pub fn analyze_brdf_at(
     }
     let sin = (1.0 - cos_theta_in * cos_theta_in).max(0.0).sqrt();
     let wi = Vec3::new(sin, 0.0, cos_theta_in);
+    if est != Estimator::PeakDensity {
+        return Ok(paper(Target::Brdf(b, wi), est, p));
+    }
     let t = Instant::now();
-    let set = sampling::sample(Target::Brdf(b, wi), p);
+    let set = sampling::sample(Target::Brdf(b, wi), est.placement(), p);
     let sample_time = t.elapsed();
-    Ok(match est {
-        Estimator::Paper => paper(&set, sample_time, p),
-        Estimator::PeakDensity => {
-            let albedo = luminance(b.albedo(wi)) as f64;
-            let max_p = if albedo > 0.0 {
-                set.max_projected as f64 / albedo
-            } else {
-                0.0
-            };
-            let mut d = Directionality::diffuse(set.variance, sample_time);
-            d.alpha_d = peak_alpha(max_p, p);
-            d
-        }
-    })
+    let albedo = luminance(b.albedo(wi)) as f64;
+    let max_p = if albedo > 0.0 {
+        set.max_projected as f64 / albedo
+    } else {
+        0.0
+    };
+    let mut d = Directionality::diffuse(set.variance, sample_time);
+    d.alpha_d = peak_alpha(max_p, p);
+    Ok(d)
 }
 
 /// Tabulates a BRDF's `alpha_D` over `p.theta_in_bins` incident angles.

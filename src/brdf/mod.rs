@@ -112,11 +112,11 @@ impl Brdf {
         }
     }
 
-    /// A 64-bit key of the model and the exact bits of its parameters: equal
-    /// models have equal keys, and distinct ones collide with probability
-    /// ~2^-64. The analysis cache is keyed by it.
-    pub fn key(&self) -> u64 {
-        let (tag, params): (u64, [f32; 7]) = match self {
+    /// The model's tag and the exact bits of its parameters (-0.0 folded
+    /// into 0.0): equal models, and only they, have equal values. The
+    /// analysis cache is keyed by it.
+    pub fn param_bits(&self) -> (u8, [u32; 7]) {
+        let (tag, params): (u8, [f32; 7]) = match self {
             Brdf::Lambert(b) => (1, [b.albedo.x, b.albedo.y, b.albedo.z, 0.0, 0.0, 0.0, 0.0]),
             Brdf::Phong(b) => {
                 let (d, s) = (b.kd(), b.ks());
@@ -131,10 +131,16 @@ impl Brdf {
                 (4, [r.x, r.y, r.z, 0.0, 0.0, 0.0, 0.0])
             }
         };
-        // +0.0 folds -0.0 into 0.0 so equal values give equal keys.
-        params
-            .iter()
-            .fold(tag, |k, v| hash2(k, (v + 0.0).to_bits() as u64))
+        // +0.0 folds -0.0 into 0.0 so equal values give equal bits.
+        (tag, params.map(|v| (v + 0.0).to_bits()))
+    }
+
+    /// A 64-bit hash of [`Brdf::param_bits`] (seeds, quick keys): distinct
+    /// models collide with probability ~2^-64; where a collision must never
+    /// matter, key by [`Brdf::param_bits`] itself.
+    pub fn key(&self) -> u64 {
+        let (tag, bits) = self.param_bits();
+        bits.iter().fold(tag as u64, |k, &v| hash2(k, v as u64))
     }
 }
 

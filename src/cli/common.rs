@@ -60,11 +60,7 @@ pub fn parse_exposure(s: &str) -> Result<f32, String> {
 }
 
 pub fn parse_estimator(s: &str) -> Result<Estimator, String> {
-    match s {
-        "paper" => Ok(Estimator::Paper),
-        "peak" => Ok(Estimator::PeakDensity),
-        _ => Err(format!("`{s}` is not one of paper, peak")),
-    }
+    s.parse().map_err(|e: adaptive_pm::Error| e.to_string())
 }
 
 impl BudgetArgs {

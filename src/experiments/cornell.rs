@@ -1,11 +1,13 @@
-//! The paper's experiments (SPEC §4): the built-in Cornell box, its light's
-//! `cos^n` exponent swept, every mode traced at each `n` with the same `N_MAX`.
+//! The paper's experiments (SPEC §4): a Cornell box (by default the built-in
+//! `cornell-empty`, the paper's scene: walls and light, no blocks; or
+//! `cornell`, or any glTF with one area light), its light's `cos^n` exponent
+//! swept, every mode traced at each `n` with the same `N_MAX`.
 //!
 //! - **Reference**: the classic mode with a diffuse light (n = 0), traced first.
 //!   Its primary map's max density is Fig. 7a's reference line, its full map's
-//!   sigma Fig. 9a's, and its full map's mean density is the density-control
-//!   target of every density-mode run (SPEC: "the classic mode's mean density
-//!   with a diffuse light"). When the sweep itself has the classic run at n = 0,
+//!   sigma Fig. 9a's, and its primary map's max density is the
+//!   density-control target of every density-mode run (SPEC §2.5; `mean`, its
+//!   full map's mean density, is the other choice). When the sweep itself has the classic run at n = 0,
 //!   that run *is* the reference (same seed, same photons) and is not traced twice.
 //! - **One trace per run** gives both maps: records carry their depth, and
 //!   [`Maps::build`] builds the primary-only and the full kd-tree.
@@ -27,10 +29,12 @@
 use crate::analysis::{analyze_emitter, AnalysisParams, Estimator};
 use crate::embree::{CommittedScene, Device};
 use crate::emitter::CosN;
-use crate::engine::measure::{DENSITY_POINTS, DENSITY_POINTS_SEED};
-use crate::engine::{measure, Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer};
+use crate::engine::measure::{DENSITY_K, DENSITY_POINTS, DENSITY_POINTS_SEED};
+use crate::engine::{Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer};
 use crate::error::{Error, Result};
-use crate::scene::{PreparedScene, Scene, SurfacePoint};
+use crate::photon_map::{density_at_facing, density_stats, DensityStats, PhotonMap};
+use crate::scene::{Light, PreparedScene, Scene, SurfacePoint};
+use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -39,6 +43,9 @@ use std::time::Instant;
 /// What the sweep runs.
 #[derive(Clone, Debug)]
 pub struct CornellConfig {
+    /// The scene: a built-in name ([`crate::scene::builtin_names`]) or a glTF
+    /// path; it must have exactly one area light.
+    pub scene: String,
     /// Light exponents, in the order they are run (see [`super::sweep::parse_sweep`]).
     pub n_values: Vec<f64>,
     /// `N_MAX` of every run (the paper: 100 000).
@@ -58,10 +65,12 @@ pub struct CornellConfig {
 /// Where the density-mode runs of a sweep put their target density.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SweepDensityTarget {
-    /// The reference's full-map *mean* density (the default: the experiments'
-    /// setting): density control then caps every map near the mean.
+    /// The reference's full-map *mean* density: density control then caps
+    /// every map near the mean, far below the reference's max.
     ReferenceMean,
-    /// The reference's primary-map *max* density (Fig. 7a's reference line).
+    /// The reference's primary-map *max* density (Fig. 7a's reference line;
+    /// the default, SPEC §2.5: density control then limits the map to the
+    /// reference, the paper's reading).
     ReferenceMax,
     /// A given density, photons per unit area (> 0).
     PerArea(f64),
@@ -91,13 +100,14 @@ impl CornellConfig {
     /// the paper's estimator.
     pub fn paper() -> Self {
         CornellConfig {
+            scene: crate::scene::BUILTIN_CORNELL_EMPTY.to_string(),
             n_values: (1..=200).map(f64::from).collect(),
             n_max: 100_000,
             modes: Mode::ALL.to_vec(),
             seed: 1,
             estimator: Estimator::Paper,
             max_depth: crate::engine::config::DEFAULT_MAX_DEPTH,
-            density_target: SweepDensityTarget::ReferenceMean,
+            density_target: SweepDensityTarget::ReferenceMax,
         }
     }
 
@@ -199,6 +209,10 @@ pub struct RunMetrics {
     pub alpha_d_paper: f64,
     /// `alpha_D` of the light by the peak-density estimator.
     pub alpha_d_peak: f64,
+    /// Mesh holding the evaluation point of the primary map's max density.
+    pub max_density_primary_mesh: String,
+    /// That point (scene units).
+    pub max_density_primary_at: [f64; 3],
 }
 
 /// `alpha_D` of the light at one `n`, both estimators, and how far each is
@@ -238,6 +252,8 @@ pub struct ModeTiming {
 /// Everything a sweep measured.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct CornellResults {
+    /// The scene's name as given (`cornell-empty`, `cornell` or a path).
+    pub scene: String,
     /// `N_MAX`.
     pub n_max: u64,
     /// The seed.
@@ -328,18 +344,52 @@ fn alpha_rows(n_values: &[f64], params: &AnalysisParams) -> Result<Vec<AlphaRow>
         .collect()
 }
 
+/// Density statistics of `map` at `points` (both sides of the surface, as
+/// `engine::measure`) and the index of the first point holding the max.
+fn stats_with_argmax(map: &PhotonMap, points: &[SurfacePoint]) -> (DensityStats, usize) {
+    let d: Vec<f64> = points
+        .par_iter()
+        .map_init(Vec::new, |scratch, p| {
+            density_at_facing(map, p.position, Vec3::ZERO, DENSITY_K, scratch) as f64
+        })
+        .collect();
+    let n = d.len().max(1) as f64;
+    let mean = d.iter().sum::<f64>() / n;
+    let sigma = (d.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt();
+    let arg = (0..d.len()).fold(0, |b, i| if d[i] > d[b] { i } else { b });
+    let stats = DensityStats {
+        max: d.get(arg).copied().unwrap_or(0.0),
+        mean,
+        sigma,
+        sigma_over_mean: if mean > 0.0 { sigma / mean } else { 0.0 },
+        points: d.len(),
+    };
+    (stats, arg)
+}
+
 /// One trace, its maps and their densities.
 fn run_one(
     tracer: &Tracer<&CommittedScene>,
     cfg: &TraceConfig,
     n: f64,
     points: &[SurfacePoint],
+    mesh_names: &[String],
     alpha: &AlphaRow,
 ) -> Result<RunMetrics> {
     let out = tracer.trace(cfg)?;
     let maps = Maps::from_photons(out.photons, out.frame);
     let t = Instant::now();
-    let m = measure(&maps, points);
+    let full = density_stats(
+        &maps.full,
+        &points
+            .iter()
+            .map(|p| (p.position, Vec3::ZERO))
+            .collect::<Vec<_>>(),
+        DENSITY_K,
+    );
+    let (primary, arg) = stats_with_argmax(&maps.primary, points);
+    let m = MapStats { full, primary };
+    let at = points.get(arg);
     let measure_s = t.elapsed().as_secs_f64();
     let r = out.report;
     let alpha_d = out.plans.first().map_or(1.0, |p| p.alpha_d as f64);
@@ -373,7 +423,17 @@ fn run_one(
         alpha_d,
         alpha_d_paper: alpha.alpha_d_paper,
         alpha_d_peak: alpha.alpha_d_peak,
+        max_density_primary_mesh: at
+            .and_then(|p| mesh_names.get(p.mesh))
+            .cloned()
+            .unwrap_or_default(),
+        max_density_primary_at: at.map_or([0.0; 3], |p| p.position.as_dvec3().to_array()),
     })
+}
+
+struct MapStats {
+    full: DensityStats,
+    primary: DensityStats,
 }
 
 /// Runs the sweep with as many workers as the current rayon pool has threads
@@ -399,7 +459,21 @@ pub fn run_cornell(
         .ok_or_else(|| Error::param("n sweep", "empty"))?;
     let analysis_s = t.elapsed().as_secs_f64();
 
-    let mut scene = Scene::cornell()?;
+    let mut scene = Scene::open(&cfg.scene)?;
+    let area_lights = scene
+        .lights()
+        .iter()
+        .filter(|l| matches!(l, Light::Area(_)))
+        .count();
+    if area_lights != 1 || scene.lights().len() != 1 {
+        return Err(Error::InvalidScene(format!(
+            "the Cornell sweep needs a scene with exactly one light, an area light; `{}` has {} lights ({} area)",
+            cfg.scene,
+            scene.lights().len(),
+            area_lights
+        )));
+    }
+    let mesh_names: Vec<String> = scene.meshes().iter().map(|m| m.name.clone()).collect();
     let device = Device::new()?;
     let rt = scene.embree_geometry(&device)?;
     let points = scene
@@ -445,6 +519,7 @@ pub fn run_cornell(
             &cfg.trace_config(Mode::Classic),
             0.0,
             &points,
+            &mesh_names,
             &alpha_ref,
         )
     })?;
@@ -476,7 +551,7 @@ pub fn run_cornell(
                 Mode::Density => density_cfg.clone(),
                 m => cfg.trace_config(m),
             };
-            out.push(run_one(&tracer, &tc, n, &points, a)?);
+            out.push(run_one(&tracer, &tc, n, &points, &mesh_names, a)?);
             progress(SweepProgress {
                 done: done.fetch_add(1, Ordering::Relaxed) + 1,
                 total,
@@ -536,6 +611,7 @@ pub fn run_cornell(
         mode: cfg.modes.last().copied().unwrap_or(Mode::Classic),
     });
     Ok(CornellResults {
+        scene: cfg.scene.clone(),
         n_max: cfg.n_max,
         seed: cfg.seed,
         estimator: cfg.estimator.to_string(),

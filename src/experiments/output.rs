@@ -84,8 +84,9 @@ fn series(r: &CornellResults, get: fn(&RunMetrics) -> f64) -> Vec<Series> {
         .collect()
 }
 
-const RUN_COLUMNS: [&str; 33] = [
+const RUN_COLUMNS: [&str; 36] = [
     "role",
+    "scene",
     "n",
     "mode",
     "n_max",
@@ -94,6 +95,8 @@ const RUN_COLUMNS: [&str; 33] = [
     "stored_primary",
     "reemitted_first_hit",
     "max_density_primary",
+    "max_density_primary_mesh",
+    "max_density_primary_at",
     "mean_density_primary",
     "sigma_density_primary",
     "sigma_over_mean_primary",
@@ -120,11 +123,12 @@ const RUN_COLUMNS: [&str; 33] = [
     "seed",
 ];
 
-fn run_row(role: &str, x: &RunMetrics, seed: u64) -> Vec<String> {
+fn run_row(role: &str, scene: &str, x: &RunMetrics, seed: u64) -> Vec<String> {
     let k = (x.n + 2.0) / 2.0;
     let join = |v: Vec<String>| v.join(";");
     vec![
         role.into(),
+        scene.into(),
         x.n.to_string(),
         x.mode.name().into(),
         x.n_max.to_string(),
@@ -133,6 +137,13 @@ fn run_row(role: &str, x: &RunMetrics, seed: u64) -> Vec<String> {
         x.stored_primary.to_string(),
         x.reemitted_first_hit.to_string(),
         x.max_density_primary.to_string(),
+        x.max_density_primary_mesh.clone(),
+        join(
+            x.max_density_primary_at
+                .iter()
+                .map(f64::to_string)
+                .collect(),
+        ),
         x.mean_density_primary.to_string(),
         x.sigma_density_primary.to_string(),
         x.sigma_over_mean_primary.to_string(),
@@ -186,10 +197,13 @@ fig9a_sigma_density.csv  standard deviation of the full map's density, and sigma
 fig9b_split_rate.csv     adaptive mode, long format: n, depth, hits, mean children per hit;
                          paths_stop = 1 at the depth limit, where the rate is 0 by construction
 runs.csv                 every metric of every run (role = reference or sweep); split rates and
-                         hits per depth joined by ';'; ratio_* = alpha_D * (n + 2) / 2
+                         hits per depth joined by ';'; ratio_* = alpha_D * (n + 2) / 2;
+                         max_density_primary_mesh / _at: the mesh and the point (x;y;z) of the
+                         primary map's max density
 alpha_d.csv              alpha_D of the light by both estimators and alpha_D * (n + 2) / 2
                          (1 keeps the peak density of the emitted directions equal to a diffuse light's)
 summary.json             every number above, the claims and their verdicts
+claims.md                the claims as a Markdown table (the README's results tables)
 *.svg, *.png             the figures
 ";
 
@@ -293,8 +307,8 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
         &csv(&["n", "depth", "hits", "split_rate", "paths_stop"], rows),
     )?);
 
-    let rows = std::iter::once(run_row("reference", &r.reference, r.seed))
-        .chain(r.runs.iter().map(|x| run_row("sweep", x, r.seed)));
+    let rows = std::iter::once(run_row("reference", &r.scene, &r.reference, r.seed))
+        .chain(r.runs.iter().map(|x| run_row("sweep", &r.scene, x, r.seed)));
     files.push(write(dir, CSV_FILES[5], &csv(&RUN_COLUMNS, rows))?);
 
     let rows = r.alpha.iter().map(|a| {
@@ -324,27 +338,36 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
     let claims = check_claims(r);
     let summary = serde_json::json!({ "results": r, "claims": claims });
     files.push(write(dir, "summary.json", &summary.to_string())?);
+    files.push(write(dir, "claims.md", &claims_markdown(r))?);
     files.push(write(dir, "README.txt", README)?);
 
-    let sweep = format!("N_MAX = {}, seed {}", r.n_max, r.seed);
+    let sweep = format!("{}, N_MAX = {}, seed {}", r.scene, r.n_max, r.seed);
+    let ref_name = |what: &str, y: f64| {
+        format!(
+            "reference {what} = {y:.3e} (classic, diffuse light, {})",
+            r.scene
+        )
+    };
     let x_label = "n (exponent of the light's cos^n radiance)".to_string();
     let plots = [
         Plot {
             title: format!("Fig. 7a: max density of the primary map ({sweep})"),
             x_label: x_label.clone(),
-            y_label: "max density (photons / mm^2)".into(),
+            y_label: "max density (photons / mm^2, log scale)".into(),
             series: series(r, |x| x.max_density_primary),
             lines: vec![RefLine {
-                name: "reference (classic, diffuse light)".into(),
+                name: ref_name("max", reference),
                 y: reference,
             }],
+            log_y: true,
         },
         Plot {
             title: format!("Fig. 7b: time to build the primary map ({sweep})"),
             x_label: x_label.clone(),
-            y_label: "trace of first hits + kd-tree (s)".into(),
+            y_label: "trace of first hits + kd-tree (s, log scale)".into(),
             series: series(r, |x| x.primary_map_time_s),
             lines: vec![],
+            log_y: true,
         },
         Plot {
             title: format!("Fig. 8: photons re-emitted after the first hit ({sweep})"),
@@ -361,16 +384,18 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
                 name: "N_MAX".into(),
                 y: r.n_max as f64,
             }],
+            log_y: false,
         },
         Plot {
             title: format!("Fig. 9a: sigma of the full map's density ({sweep})"),
             x_label: x_label.clone(),
-            y_label: "sigma of density (photons / mm^2)".into(),
+            y_label: "sigma of density (photons / mm^2, log scale)".into(),
             series: series(r, |x| x.sigma_density),
             lines: vec![RefLine {
-                name: "reference (classic, diffuse light)".into(),
+                name: ref_name("sigma", r.reference.sigma_density),
                 y: r.reference.sigma_density,
             }],
+            log_y: true,
         },
         Plot {
             title: format!("Fig. 9a (normalised): sigma / mean of the density ({sweep})"),
@@ -378,14 +403,15 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
             y_label: "sigma / mean of density (1)".into(),
             series: series(r, |x| x.sigma_over_mean),
             lines: vec![RefLine {
-                name: "reference (classic, diffuse light)".into(),
+                name: ref_name("sigma / mean", r.reference.sigma_over_mean),
                 y: r.reference.sigma_over_mean,
             }],
+            log_y: false,
         },
         Plot {
             title: format!("Fig. 9b: mean split rate by depth, adaptive ({sweep})"),
             x_label: "bounce depth (0 = first hit)".into(),
-            y_label: "children per hit".into(),
+            y_label: "children per hit (log scale)".into(),
             series: fig9b_indices(adaptive.len())
                 .into_iter()
                 .map(|i| Series {
@@ -400,6 +426,7 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
                 name: "1 child per hit".into(),
                 y: 1.0,
             }],
+            log_y: true,
         },
         Plot {
             title: "alpha_D(n) (n + 2) / 2 of the light, both estimators".into(),
@@ -419,6 +446,7 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
                 name: "1 = peak density kept".into(),
                 y: 1.0,
             }],
+            log_y: false,
         },
     ];
     for (stem, plot) in PLOT_STEMS.iter().zip(&plots) {
@@ -428,6 +456,34 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
         files.push(p.with_extension("png"));
     }
     Ok(files)
+}
+
+/// The claims as a Markdown table (written as `claims.md`; the README's
+/// results tables are these files, pasted unedited).
+pub fn claims_markdown(r: &CornellResults) -> String {
+    let mut s = format!(
+        "Scene `{}`, N_MAX = {}, seed {}, n = {}..{} ({} values), {} estimator.\n\n\
+         | fig. | verdict | paper | measured |\n|---|---|---|---|\n",
+        r.scene,
+        r.n_max,
+        r.seed,
+        r.n_values.first().copied().unwrap_or(0.0),
+        r.n_values.last().copied().unwrap_or(0.0),
+        r.n_values.len(),
+        r.estimator
+    );
+    let esc = |t: &str| t.replace('|', "\\|");
+    for c in check_claims(r) {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} |",
+            c.figure,
+            c.verdict.word(),
+            esc(c.paper),
+            esc(&c.measured)
+        );
+    }
+    s
 }
 
 /// The claims as a fixed-width text table, one claim per block.

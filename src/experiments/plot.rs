@@ -46,6 +46,36 @@ pub struct Plot {
     pub series: Vec<Series>,
     /// Reference lines, dashed.
     pub lines: Vec<RefLine>,
+    /// A log10 y axis (for values spanning decades); points and lines at
+    /// y <= 0 are left out.
+    pub log_y: bool,
+}
+
+/// `plot` with its y values mapped to log10 when it asks for a log axis.
+fn y_mapped(plot: &Plot) -> Plot {
+    if !plot.log_y {
+        return plot.clone();
+    }
+    let f = |y: f64| if y > 0.0 { y.log10() } else { f64::NAN };
+    Plot {
+        series: plot
+            .series
+            .iter()
+            .map(|s| Series {
+                name: s.name.clone(),
+                points: s.points.iter().map(|&(x, y)| (x, f(y))).collect(),
+            })
+            .collect(),
+        lines: plot
+            .lines
+            .iter()
+            .map(|l| RefLine {
+                name: l.name.clone(),
+                y: f(l.y),
+            })
+            .collect(),
+        ..plot.clone()
+    }
 }
 
 /// Registers the bundled DejaVu Sans as "sans-serif" (once): plotters'
@@ -99,8 +129,13 @@ fn bounds(plot: &Plot) -> ((f64, f64), (f64, f64)) {
     if !y.0.is_finite() {
         y = (0.0, 1.0);
     }
-    // every figure's quantity is >= 0: start the y axis at 0, leave headroom
-    let y0 = y.0.min(0.0);
+    // every figure's quantity is >= 0: start a linear y axis at 0, leave
+    // headroom; a log axis starts just under the smallest value
+    let y0 = if plot.log_y {
+        y.0 - 0.05 * (y.1 - y.0).max(0.5)
+    } else {
+        y.0.min(0.0)
+    };
     let mut y1 = y.1 + 0.08 * (y.1 - y0);
     if y1 <= y0 {
         y1 = y0 + 1.0;
@@ -129,7 +164,10 @@ fn draw<DB: DrawingBackend>(
 ) -> std::result::Result<(), String> {
     let e = |e: &dyn std::fmt::Debug| format!("{e:?}");
     root.fill(&WHITE).map_err(|x| e(&x))?;
+    let plot = &y_mapped(plot);
     let ((x0, x1), (y0, y1)) = bounds(plot);
+    let log_tick = |v: &f64| tick(&10f64.powf(*v));
+    let y_tick: &dyn Fn(&f64) -> String = if plot.log_y { &log_tick } else { &tick };
     let mut chart = ChartBuilder::on(&root)
         .caption(&plot.title, ("sans-serif", 22))
         .margin(16)
@@ -145,7 +183,7 @@ fn draw<DB: DrawingBackend>(
         .label_style(("sans-serif", 15))
         .axis_desc_style(("sans-serif", 17))
         .x_label_formatter(&tick)
-        .y_label_formatter(&tick)
+        .y_label_formatter(y_tick)
         .draw()
         .map_err(|x| e(&x))?;
     for (i, s) in plot.series.iter().enumerate() {

@@ -35,6 +35,7 @@ pub(crate) fn settings_of(cfg: &TraceConfig) -> Settings {
         estimator: match cfg.estimator {
             crate::analysis::Estimator::Paper => 0,
             crate::analysis::Estimator::PeakDensity => 1,
+            crate::analysis::Estimator::PaperIid => 2,
         },
         seed: cfg.seed,
         n_max: cfg.budget.n_max().unwrap_or(0),

@@ -40,6 +40,13 @@ use std::path::Path;
 /// What a built-in scene is called on the command line.
 #[doc(hidden)]
 pub const BUILTIN_CORNELL: &str = "cornell";
+/// The empty Cornell box (walls and light, no blocks): the paper's scene.
+pub const BUILTIN_CORNELL_EMPTY: &str = "cornell-empty";
+
+/// The names of every built-in scene ([`Scene::open`] accepts each).
+pub fn builtin_names() -> Vec<&'static str> {
+    cornell::BUILTINS.iter().map(|(n, _)| *n).collect()
+}
 
 /// A surface material: a BRDF, and emission when the surface is a light.
 #[derive(Clone, Debug, PartialEq)]
@@ -175,20 +182,26 @@ impl Scene {
         gltf_load::load_path(path.as_ref())
     }
 
-    /// `cornell` for the built-in scene, else a path to a glTF file: the
-    /// command line's scene argument (a library names its scene explicitly,
-    /// with [`Scene::cornell`] or [`Scene::load`]).
+    /// A built-in scene by name ([`builtin_names`]), else a path to a glTF
+    /// file: the command line's scene argument (a library names its scene
+    /// explicitly, with [`Scene::cornell`] or [`Scene::load`]).
     #[cfg(feature = "gltf")]
     #[doc(hidden)]
     ///
     /// # Errors
-    /// As [`Scene::load`].
+    /// As [`Scene::load`]; [`Error::InvalidScene`] listing the built-in names
+    /// when `name_or_path` is neither a built-in name nor an existing file.
     pub fn open(name_or_path: &str) -> Result<Self> {
-        if name_or_path == BUILTIN_CORNELL {
-            Self::cornell()
-        } else {
-            Self::load(name_or_path)
+        if let Some(s) = cornell::builtin(name_or_path) {
+            return s;
         }
+        if !Path::new(name_or_path).exists() {
+            return Err(Error::InvalidScene(format!(
+                "`{name_or_path}` is neither a built-in scene ({}) nor an existing glTF file",
+                builtin_names().join(", ")
+            )));
+        }
+        Self::load(name_or_path)
     }
 
     /// Adds a material and returns its index.
