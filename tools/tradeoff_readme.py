@@ -2,9 +2,10 @@
 """Prints the README's trade section (markdown) from `bench tradeoff --json`
 outputs, so no figure in it is typed by hand.
 
-    python3 tools/tradeoff_readme.py LABEL=DIR/tradeoff.json [LABEL=...] > section.md
+    python3 tools/tradeoff_readme.py "NAME@@COMMAND@@DIR/tradeoff.json" ... > section.md
 
-LABEL is the command that produced the file (shown verbatim). A mode "wins"
+NAME titles the scene, COMMAND is the command that produced the file (shown
+verbatim). A mode "wins"
 a level when its error is more than 5 % below the next mode's, "ties" within
 5 %."""
 import json, sys
@@ -19,7 +20,7 @@ def verdict(level, key="errors"):
     (m0, e0), (m1, e1) = errs[0], errs[1]
     ad = dict(errs).get("adaptive")
     if ad is None:
-        return "n/a", ""
+        return "has no value", "outside its measured range"
     if m0 == "adaptive":
         word = "wins" if e1 > e0 * (1 + TIE) else "ties"
         return word, f"x{e1 / e0:.2f} below {m1}"
@@ -27,9 +28,9 @@ def verdict(level, key="errors"):
     return word, f"x{ad / e0:.2f} of {m0}"
 
 
-def section(label, d):
+def section(name, label, d):
     r = d["reference"]
-    out = [f"**{d['scene']}** — `{label}` ({d['elapsed_s']:.0f} s, {d['threads']} threads). "
+    out = [f"**{name}** — `{label}` ({d['elapsed_s']:.0f} s, {d['threads']} threads). "
            f"Reference: path tracer, {r['spp']} spp; its noise {r['noise']:.3f} (indirect), "
            f"{r['image_noise']:.3f} (image), {r['points_noise']:.3f} (points).", ""]
     out.append("| mode | N_MAX | time (s) | map MB | (a) indirect: mean / bias / spread | (b) image | (c) points: mean / bias / spread |")
@@ -64,9 +65,9 @@ def section(label, d):
 
 def main():
     for arg in sys.argv[1:]:
-        label, path = arg.split("=", 1)
+        name, label, path = arg.split("@@")
         with open(path) as f:
-            print(section(label, json.load(f)))
+            print(section(name, label, json.load(f)))
 
 
 if __name__ == "__main__":

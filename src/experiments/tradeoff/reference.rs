@@ -188,7 +188,11 @@ impl Reference {
     fn read(files: &[PathBuf; 5], points: &[SurfacePoint], keep: &[bool]) -> Option<Self> {
         let text = std::fs::read_to_string(&files[0]).ok()?;
         let mut cached: Cached = serde_json::from_str(&text).ok()?;
-        if cached.direct_e.len() != points.len() {
+        let n = points.len();
+        if [&cached.direct_e, &cached.indirect_a, &cached.indirect_b]
+            .iter()
+            .any(|v| v.len() != n)
+        {
             return None;
         }
         let images = [0, 1, 2, 3].map(|i| Image::read_exr(&files[i + 1]).ok());
