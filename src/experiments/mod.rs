@@ -20,3 +20,4 @@ pub mod cornell;
 pub mod output;
 pub mod plot;
 pub mod sweep;
+pub mod tradeoff;

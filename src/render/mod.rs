@@ -74,6 +74,9 @@ pub mod estimate;
 pub mod image;
 mod integrator;
 pub mod metrics;
+pub mod path;
+mod path_light;
+mod path_render;
 
 pub use camera::CameraRays;
 pub use direct::quadrature_irradiance;
@@ -84,6 +87,8 @@ pub use estimate::{irradiance_default, irradiance_estimate, radiance_estimate, E
 pub use image::{check_output_path, Image, ToneMap, MAX_DIMENSION};
 pub use integrator::render;
 pub use metrics::{relative_rmse, rmse};
+pub use path::{Integrator, PathPart, PathTracer};
+pub use path_render::{indirect_irradiance, light_pixels, render_path, PathHalves};
 
 use crate::error::{Error, Result};
 use crate::photon_map::{PhotonMap, PhotonRecord};

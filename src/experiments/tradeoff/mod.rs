@@ -1,0 +1,277 @@
+//! The speed/accuracy trade (SPEC §5, issue 10): error against an unbiased
+//! reference, against time and memory, for the three modes over a range of
+//! budgets and several seeds.
+//!
+//! # The reference
+//! The path tracer ([`crate::render::path`]), never one of the competitors,
+//! rendered as two independent halves; its relative noise is `rmse(A, B) / 2
+//! / mean` per measured quantity. It must be below a third of the smallest
+//! error it judges ([`NOISE_RATIO`]): otherwise [`run_tradeoff`] fails with
+//! [`crate::Error::InvalidParameter`] naming the numbers and the `spp` to ask
+//! for. It is cached under [`TradeoffConfig::cache_dir`] by a hash of the
+//! scene's *content* (geometry, materials, lights, camera: the same scene
+//! under another path or name hits the cache; an edited one does not) and of
+//! the reference settings.
+//!
+//! # The errors (each against the reference)
+//! - (a) `indirect_rel_rmse`: the indirect light at the first non-delta hit,
+//!   the photon map's whole share of the image. The photon render's indirect
+//!   part is its full render minus its direct-only render *with the same seed*
+//!   (both draw the same light samples, so the difference is the map's
+//!   estimate exactly); the path tracer's is
+//!   [`crate::render::PathPart::Indirect`].
+//! - (b) `image_rel_rmse`: the full image (emitters hidden).
+//! - (c) `points_rel_err`: irradiance at [`TradeoffConfig::points`] fixed
+//!   area-uniform points on the non-emitting surfaces, read from the full map
+//!   alone (no pixels, no light sampling); the reference is the direct
+//!   light's quadrature plus path-traced indirect irradiance.
+//!
+//! Image errors are relative RMSE over the pixels that are not a light (a
+//! light's own pixels are exact in every renderer and would dominate the
+//! norm): `sqrt(mean (a - r)^2) / mean(r)`. `k` of every estimate grows as
+//! `sqrt(N_MAX) / 2` (20..=1000) so that noise and kernel bias both fall.
+//!
+//! # Bias and variance
+//! Over the seeds of one mode and budget: `spread` is the rms deviation of
+//! each seed's result from the seeds' mean (corrected by `S / (S - 1)`), and
+//! `bias` the error of that mean with the spread's share and the reference's
+//! noise removed (`bias^2 = err(mean)^2 - spread^2 / S - noise_ref^2`,
+//! floored at 0).
+//!
+//! # The two axes
+//! `time_s` is trace (with the analysis) + kd-trees + the full render, on
+//! the pool the study runs in (the thread count is reported); `map_bytes` the
+//! kd-trees the renderer keeps (the full and the indirect map). Equal-time
+//! and equal-memory comparisons interpolate each mode's mean indirect error
+//! log-log at one level per budget ([`summary`]).
+//!
+//! # The estimated error
+//! `estimated_rel_err` needs no reference: two extra traces at `N_MAX / 2`
+//! with independent seeds, the points' irradiance read from each,
+//! `rms(E_A - E_B) / sqrt(2) / mean`: the noise of one map of that budget. It
+//! sees no kernel bias; how well it tracks `points_rel_err` is reported as
+//! the ratio over the runs. [`knob`] uses it to pick Q for an error target.
+
+pub mod knob;
+mod measure;
+pub mod output;
+mod reference;
+pub mod summary;
+
+pub use measure::{k_for, masked_rel_rmse, rel_rmse};
+pub use reference::{scene_hash, Reference, ReferenceInfo};
+
+use crate::engine::Mode;
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// The reference noise must be below this fraction of the smallest error it judges.
+pub const NOISE_RATIO: f64 = 1.0 / 3.0;
+
+/// What the study runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TradeoffConfig {
+    /// `N_MAX` of each budget level, ascending.
+    pub budgets: Vec<u64>,
+    /// The modes compared.
+    pub modes: Vec<Mode>,
+    /// Seeds per mode and budget (bias and variance are separated over them).
+    pub seeds: u32,
+    /// Image size of every render (and of the reference).
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Samples per pixel of the photon renders.
+    pub spp: u32,
+    /// Samples per pixel of each half of the path-traced reference.
+    pub reference_spp: u32,
+    /// Fixed surface points of error (c).
+    pub points: usize,
+    /// Path-traced rays per point and half of the points' reference.
+    pub point_samples: u32,
+    /// Where the reference is cached (`None`: not cached).
+    pub cache_dir: Option<PathBuf>,
+}
+
+impl Default for TradeoffConfig {
+    /// The defaults: `bench tradeoff cornell-empty` in under 5 minutes on 2 cores.
+    fn default() -> Self {
+        TradeoffConfig {
+            budgets: vec![10_000, 40_000, 160_000],
+            modes: Mode::ALL.to_vec(),
+            seeds: 3,
+            width: 32,
+            height: 32,
+            spp: 4,
+            reference_spp: 8192,
+            points: 128,
+            point_samples: 4096,
+            cache_dir: None,
+        }
+    }
+}
+
+impl TradeoffConfig {
+    /// Checks the settings.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        if self.budgets.is_empty() || self.budgets.contains(&0) {
+            return Err(Error::param(
+                "budgets",
+                "need at least one, each N_MAX >= 1",
+            ));
+        }
+        if self.modes.is_empty() {
+            return Err(Error::param("modes", "need at least one"));
+        }
+        if self.seeds == 0 || self.seeds > 64 {
+            return Err(Error::param("seeds", "must be in 1..=64"));
+        }
+        if self.points == 0 || self.point_samples == 0 {
+            return Err(Error::param("points", "need at least one point and sample"));
+        }
+        if self.reference_spp == 0 {
+            return Err(Error::param("reference spp", "must be at least 1"));
+        }
+        self.render_config(self.spp, 1).validate()
+    }
+
+    /// A render of this study's size: emitters hidden.
+    pub fn render_config(&self, spp: u32, seed: u64) -> crate::render::RenderConfig {
+        let mut c = crate::render::RenderConfig::new(self.width, self.height);
+        c.spp = spp;
+        c.seed = seed;
+        c.show_emitters = false;
+        c
+    }
+}
+
+/// One run: a mode, a budget, a seed.
+#[derive(Clone, Debug, Serialize)]
+pub struct Run {
+    /// The mode.
+    pub mode: Mode,
+    /// `sqrt(N_MAX / INT_MAX)`.
+    pub quality: f64,
+    /// The budget.
+    pub n_max: u64,
+    /// The seed.
+    pub seed: u64,
+    /// Photons stored.
+    pub photons: usize,
+    /// Photons per estimate.
+    pub k: usize,
+    /// Trace (with the analysis) seconds.
+    pub trace_s: f64,
+    /// kd-tree seconds.
+    pub build_s: f64,
+    /// Full render seconds.
+    pub render_s: f64,
+    /// `trace_s + build_s + render_s`.
+    pub time_s: f64,
+    /// Bytes of the kept kd-trees (full + indirect map).
+    pub map_bytes: usize,
+    /// (a) indirect light, relative RMSE over non-light pixels.
+    pub indirect_rel_rmse: f64,
+    /// (b) full image, relative RMSE over non-light pixels.
+    pub image_rel_rmse: f64,
+    /// (c) irradiance at the fixed points from the map alone, relative RMSE.
+    pub points_rel_err: f64,
+    /// (c) estimated without a reference from two half-maps.
+    pub estimated_rel_err: f64,
+}
+
+/// Everything the study measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct TradeoffResults {
+    /// The scene's name or path as given.
+    pub scene: String,
+    /// The reference.
+    pub reference: ReferenceInfo,
+    /// Every run, by mode, then budget, then seed.
+    pub runs: Vec<Run>,
+    /// Per mode and budget, over the seeds.
+    pub groups: Vec<summary::Group>,
+    /// Equal-time comparison, one entry per budget level.
+    pub equal_time: Vec<summary::Level>,
+    /// Equal-memory comparison, one entry per budget level.
+    pub equal_memory: Vec<summary::Level>,
+    /// `points_rel_err / estimated_rel_err` over the runs.
+    pub estimate_tracking: summary::Tracking,
+    /// Worker threads of the pool the study ran on.
+    pub threads: usize,
+    /// Wall-clock seconds of the whole study.
+    pub elapsed_s: f64,
+}
+
+/// Progress of [`run_tradeoff`]: runs done of the total, and what runs now.
+#[derive(Clone, Debug)]
+pub struct Progress {
+    /// Runs finished.
+    pub done: usize,
+    /// Runs in all.
+    pub total: usize,
+    /// What is being done.
+    pub stage: String,
+}
+
+/// Runs the study on `scene` (named `name` in the output) on the current
+/// rayon pool.
+///
+/// # Errors
+/// Bad settings, a scene that cannot be traced, an unwritable cache, or a
+/// reference too noisy for the smallest error it judges (see the module docs).
+pub fn run_tradeoff(
+    name: &str,
+    scene: &Scene,
+    cfg: &TradeoffConfig,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Result<TradeoffResults> {
+    cfg.validate()?;
+    scene.validate()?;
+    let start = std::time::Instant::now();
+    let device = crate::embree::Device::new()?;
+    let rt = scene.embree_geometry(&device)?;
+    let total = cfg.modes.len() * cfg.budgets.len() * cfg.seeds as usize;
+    let say = |done: usize, stage: String| progress(Progress { done, total, stage });
+    say(0, "path-traced reference".into());
+    let reference = Reference::get(scene, &rt, cfg)?;
+    let mut runs = Vec::with_capacity(total);
+    let mut outputs = Vec::with_capacity(total);
+    for &mode in &cfg.modes {
+        for &n_max in &cfg.budgets {
+            for s in 0..cfg.seeds as u64 {
+                say(
+                    runs.len(),
+                    format!("{} N_MAX {n_max} seed {}", mode.name(), s + 1),
+                );
+                let (run, out) = measure::measure(scene, &rt, cfg, &reference, mode, n_max, s + 1)?;
+                runs.push(run);
+                outputs.push(out);
+            }
+        }
+    }
+    say(total, "summary".into());
+    let groups = summary::groups(&runs, &outputs, &reference, cfg);
+    reference.check_noise(&runs)?;
+    Ok(TradeoffResults {
+        scene: name.to_string(),
+        equal_time: summary::equal(&groups, &cfg.modes, cfg.budgets.len(), summary::Axis::Time),
+        equal_memory: summary::equal(
+            &groups,
+            &cfg.modes,
+            cfg.budgets.len(),
+            summary::Axis::Memory,
+        ),
+        estimate_tracking: summary::tracking(&runs),
+        reference: reference.info.clone(),
+        runs,
+        groups,
+        threads: rayon::current_num_threads(),
+        elapsed_s: start.elapsed().as_secs_f64(),
+    })
+}

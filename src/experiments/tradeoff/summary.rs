@@ -1,0 +1,274 @@
+//! The study's summaries: bias and variance per mode and budget, the
+//! equal-time and equal-memory comparisons, and how the reference-free
+//! error estimate tracks the true error.
+//!
+//! **Equal time / memory.** Level `i` is the geometric mean over the modes of
+//! their mean time (or map bytes) at budget `i`. Each mode's mean indirect
+//! error (and points error) is interpolated log-log along its own curve at
+//! that level; up to a factor [`MAX_EXTRAPOLATION`] beyond its measured range
+//! the end segment is extended, further out the mode has no value there.
+
+use super::measure::RunOutput;
+use super::reference::Reference;
+use super::{Run, TradeoffConfig};
+use crate::engine::Mode;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// How far (as a ratio) a curve is extended beyond its measured range.
+pub const MAX_EXTRAPOLATION: f64 = 2.0;
+
+/// One error over the seeds of a mode and budget.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Stat {
+    /// Mean over the seeds of each seed's error.
+    pub mean: f64,
+    /// Error of the seeds' mean result, the spread's share and the
+    /// reference's own noise removed (in quadrature).
+    pub bias: f64,
+    /// rms deviation of one seed's result from the seeds' mean (relative).
+    pub spread: f64,
+}
+
+/// One mode and budget over its seeds.
+#[derive(Clone, Debug, Serialize)]
+pub struct Group {
+    /// The mode.
+    pub mode: Mode,
+    /// The budget.
+    pub n_max: u64,
+    /// Its quality Q.
+    pub quality: f64,
+    /// Mean seconds.
+    pub time_s: f64,
+    /// Mean bytes of the kept maps.
+    pub map_bytes: f64,
+    /// (a) indirect image.
+    pub indirect: Stat,
+    /// (b) full image.
+    pub image: Stat,
+    /// (c) points.
+    pub points: Stat,
+}
+
+/// Bias/spread of samples (one vector per seed) against `r`, relative to `mean(r)`.
+fn stat(samples: &[Vec<f64>], r: &[f64], errs: &[f64], ref_noise: f64) -> Stat {
+    let s = samples.len().max(1) as f64;
+    let n = r.len().max(1) as f64;
+    let rm = r.iter().sum::<f64>() / n;
+    if rm <= 0.0 {
+        return Stat::default();
+    }
+    let mean: Vec<f64> = (0..r.len())
+        .map(|i| samples.iter().map(|v| v[i]).sum::<f64>() / s)
+        .collect();
+    let var = samples
+        .iter()
+        .map(|v| {
+            v.iter()
+                .zip(&mean)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                / n
+        })
+        .sum::<f64>()
+        / s
+        * if s > 1.0 { s / (s - 1.0) } else { 0.0 };
+    let err2 = mean
+        .iter()
+        .zip(r)
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        / n;
+    Stat {
+        mean: errs.iter().sum::<f64>() / errs.len().max(1) as f64,
+        bias: (err2 / (rm * rm) - var / s / (rm * rm) - ref_noise * ref_noise)
+            .max(0.0)
+            .sqrt(),
+        spread: var.sqrt() / rm,
+    }
+}
+
+/// Kept pixels and channels of an image, flattened.
+fn flat(img: &crate::render::Image, keep: &[bool]) -> Vec<f64> {
+    img.pixels
+        .iter()
+        .zip(keep)
+        .filter(|(_, k)| **k)
+        .flat_map(|(p, _)| [p.x as f64, p.y as f64, p.z as f64])
+        .collect()
+}
+
+/// Groups the runs (in the study's order) by mode and budget.
+pub(crate) fn groups(
+    runs: &[Run],
+    outs: &[RunOutput],
+    r: &Reference,
+    cfg: &TradeoffConfig,
+) -> Vec<Group> {
+    let s = cfg.seeds as usize;
+    let (ri, rf) = (flat(&r.indirect, &r.keep), flat(&r.full, &r.keep));
+    runs.chunks(s)
+        .zip(outs.chunks(s))
+        .map(|(rs, os)| {
+            let avg = |f: fn(&Run) -> f64| rs.iter().map(f).sum::<f64>() / rs.len() as f64;
+            let ind: Vec<Vec<f64>> = os.iter().map(|o| flat(&o.indirect, &r.keep)).collect();
+            let full: Vec<Vec<f64>> = os.iter().map(|o| flat(&o.full, &r.keep)).collect();
+            let pts: Vec<Vec<f64>> = os.iter().map(|o| o.points.clone()).collect();
+            let errs = |f: fn(&Run) -> f64| rs.iter().map(f).collect::<Vec<f64>>();
+            Group {
+                mode: rs[0].mode,
+                n_max: rs[0].n_max,
+                quality: rs[0].quality,
+                time_s: avg(|r| r.time_s),
+                map_bytes: avg(|r| r.map_bytes as f64),
+                indirect: stat(&ind, &ri, &errs(|r| r.indirect_rel_rmse), r.info.noise),
+                image: stat(&full, &rf, &errs(|r| r.image_rel_rmse), r.info.image_noise),
+                points: stat(
+                    &pts,
+                    &r.irradiance,
+                    &errs(|r| r.points_rel_err),
+                    r.info.points_noise,
+                ),
+            }
+        })
+        .collect()
+}
+
+/// The axis of a comparison.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Axis {
+    /// Seconds.
+    Time,
+    /// Bytes of the kept maps.
+    Memory,
+}
+
+/// One level of an equal-time or equal-memory comparison.
+#[derive(Clone, Debug, Serialize)]
+pub struct Level {
+    /// Budget level (0 = the smallest budget).
+    pub level: usize,
+    /// Seconds or bytes of the level.
+    pub at: f64,
+    /// The mode with the lowest indirect error there.
+    pub best: Option<Mode>,
+    /// Each mode's mean indirect error there.
+    pub errors: BTreeMap<String, f64>,
+    /// The mode with the lowest points error there.
+    pub best_points: Option<Mode>,
+    /// Each mode's mean points error there.
+    pub points_errors: BTreeMap<String, f64>,
+}
+
+/// log-log interpolation of `(x, y)` points (x ascending) at `x`.
+pub fn interpolate(c: &[(f64, f64)], x: f64) -> Option<f64> {
+    let c: Vec<(f64, f64)> = c
+        .iter()
+        .copied()
+        .filter(|p| p.0 > 0.0 && p.1 > 0.0)
+        .collect();
+    let (first, last) = (c.first()?, c.last()?);
+    if x < first.0 / MAX_EXTRAPOLATION || x > last.0 * MAX_EXTRAPOLATION || !(x > 0.0) {
+        return None;
+    }
+    if c.len() == 1 {
+        return (x == first.0).then_some(first.1);
+    }
+    let i = c
+        .windows(2)
+        .position(|w| x <= w[1].0)
+        .unwrap_or(c.len() - 2);
+    let ((x0, y0), (x1, y1)) = (c[i], c[i + 1]);
+    let f = if x1 > x0 {
+        (x.ln() - x0.ln()) / (x1.ln() - x0.ln())
+    } else {
+        0.0
+    };
+    Some((y0.ln() + f * (y1.ln() - y0.ln())).exp())
+}
+
+fn best(errors: &BTreeMap<String, f64>, modes: &[Mode]) -> Option<Mode> {
+    modes
+        .iter()
+        .filter_map(|m| errors.get(m.name()).map(|e| (*m, *e)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|p| p.0)
+}
+
+/// The equal-time or equal-memory comparison, one level per budget.
+pub fn equal(groups: &[Group], modes: &[Mode], levels: usize, axis: Axis) -> Vec<Level> {
+    let x = |g: &Group| match axis {
+        Axis::Time => g.time_s,
+        Axis::Memory => g.map_bytes,
+    };
+    let curve = |m: Mode, f: fn(&Group) -> f64| {
+        let mut c: Vec<(f64, f64)> = groups
+            .iter()
+            .filter(|g| g.mode == m)
+            .map(|g| (x(g), f(g)))
+            .collect();
+        c.sort_by(|a, b| a.0.total_cmp(&b.0));
+        c
+    };
+    (0..levels)
+        .map(|i| {
+            let xs: Vec<f64> = modes
+                .iter()
+                .filter_map(|m| groups.iter().filter(|g| g.mode == *m).nth(i).map(x))
+                .filter(|v| *v > 0.0)
+                .collect();
+            let at = (xs.iter().map(|v| v.ln()).sum::<f64>() / xs.len().max(1) as f64).exp();
+            let at_mode = |f: fn(&Group) -> f64| -> BTreeMap<String, f64> {
+                modes
+                    .iter()
+                    .filter_map(|m| {
+                        interpolate(&curve(*m, f), at).map(|e| (m.name().to_string(), e))
+                    })
+                    .collect()
+            };
+            let errors = at_mode(|g| g.indirect.mean);
+            let points_errors = at_mode(|g| g.points.mean);
+            Level {
+                level: i,
+                at,
+                best: best(&errors, modes),
+                errors,
+                best_points: best(&points_errors, modes),
+                points_errors,
+            }
+        })
+        .collect()
+}
+
+/// How `estimated_rel_err` tracks `points_rel_err`.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Tracking {
+    /// Runs with a positive estimate.
+    pub runs: usize,
+    /// Median of `points_rel_err / estimated_rel_err`.
+    pub median_ratio: f64,
+    /// Smallest ratio.
+    pub min_ratio: f64,
+    /// Largest ratio.
+    pub max_ratio: f64,
+}
+
+/// The ratio true / estimated error over `runs`.
+pub fn tracking(runs: &[Run]) -> Tracking {
+    let mut r: Vec<f64> = runs
+        .iter()
+        .filter(|r| r.estimated_rel_err > 0.0)
+        .map(|r| r.points_rel_err / r.estimated_rel_err)
+        .collect();
+    r.sort_by(f64::total_cmp);
+    if r.is_empty() {
+        return Tracking::default();
+    }
+    Tracking {
+        runs: r.len(),
+        median_ratio: r[r.len() / 2],
+        min_ratio: r[0],
+        max_ratio: r[r.len() - 1],
+    }
+}

@@ -1,0 +1,140 @@
+//! The trade study as a library (`experiments::tradeoff`): the knob's
+//! calibration is monotone, the reference's noise guard stops a study it
+//! cannot judge, and the reference cache is keyed by content, not path.
+//! Tiny images and budgets: seconds each.
+
+use adaptive_pm::embree::Device;
+use adaptive_pm::engine::Mode;
+use adaptive_pm::experiments::tradeoff::output::to_json;
+use adaptive_pm::experiments::tradeoff::{run_tradeoff, scene_hash, Reference, TradeoffConfig};
+use adaptive_pm::scene::Scene;
+
+const CORNELL_GLTF: &[u8] = include_bytes!("../assets/cornell_box.gltf");
+use adaptive_pm::Error;
+
+fn small(budgets: Vec<u64>, reference_spp: u32) -> TradeoffConfig {
+    TradeoffConfig {
+        budgets,
+        modes: vec![Mode::Adaptive, Mode::Classic],
+        seeds: 2,
+        width: 16,
+        height: 16,
+        spp: 2,
+        reference_spp,
+        points: 64,
+        point_samples: 2048,
+        cache_dir: None,
+    }
+}
+
+/// Error against Q falls and the work (photons stored, bytes of the maps:
+/// what the time follows; tests are not timed) grows, over three Q that are
+/// 4x apart in N_MAX, for both modes; every run has the JSON keys.
+#[test]
+fn quality_knob_is_monotone_in_error_and_work() {
+    let scene = Scene::cornell().unwrap();
+    let cfg = small(vec![2_000, 8_000, 32_000], 2048);
+    let r = run_tradeoff("cornell", &scene, &cfg, &|_| {}).unwrap();
+    assert!(r.reference.noise > 0.0 && r.reference.integrator == "path");
+    for mode in [Mode::Adaptive, Mode::Classic] {
+        let g: Vec<_> = r.groups.iter().filter(|g| g.mode == mode).collect();
+        assert_eq!(g.len(), 3);
+        for w in g.windows(2) {
+            assert!(w[1].quality > w[0].quality);
+            assert!(
+                w[1].indirect.mean < w[0].indirect.mean,
+                "{mode:?}: indirect error {} at N {} then {} at N {}",
+                w[0].indirect.mean,
+                w[0].n_max,
+                w[1].indirect.mean,
+                w[1].n_max
+            );
+            assert!(w[1].map_bytes > w[0].map_bytes, "{mode:?}: map bytes");
+        }
+        let photons = |n: u64| -> usize {
+            r.runs
+                .iter()
+                .filter(|x| x.mode == mode && x.n_max == n)
+                .map(|x| x.photons)
+                .sum()
+        };
+        assert!(photons(2_000) < photons(8_000) && photons(8_000) < photons(32_000));
+    }
+    let v = to_json(&r);
+    for key in ["integrator", "spp", "noise"] {
+        assert!(v["reference"].get(key).is_some(), "reference.{key}");
+    }
+    for key in [
+        "mode",
+        "quality",
+        "n_max",
+        "seed",
+        "time_s",
+        "map_bytes",
+        "indirect_rel_rmse",
+        "image_rel_rmse",
+        "points_rel_err",
+        "estimated_rel_err",
+    ] {
+        for run in v["runs"].as_array().unwrap() {
+            assert!(run.get(key).is_some(), "runs[].{key}");
+        }
+    }
+    assert_eq!(v["equal_time"].as_array().unwrap().len(), 3);
+    assert_eq!(v["equal_memory"].as_array().unwrap().len(), 3);
+    assert!(r.estimate_tracking.runs == r.runs.len());
+}
+
+/// A reference of 8 spp is far noisier than a third of the errors it
+/// would judge: the study says so and stops.
+#[test]
+fn a_noisy_reference_stops_the_study() {
+    let scene = Scene::cornell().unwrap();
+    let mut cfg = small(vec![20_000], 4);
+    cfg.modes = vec![Mode::Classic];
+    cfg.seeds = 1;
+    cfg.point_samples = 8;
+    match run_tradeoff("cornell", &scene, &cfg, &|_| {}) {
+        Err(Error::InvalidParameter { .. }) => {}
+        other => panic!("expected the noise guard to stop the study, got {other:?}"),
+    }
+}
+
+/// The same scene content under two paths shares one cached reference; a
+/// different light exponent does not.
+#[test]
+fn reference_cache_is_keyed_by_content_not_path() {
+    let dir = std::env::temp_dir().join(format!("apm-tradeoff-cache-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (a, b) = (dir.join("a.gltf"), dir.join("b.gltf"));
+    std::fs::write(&a, CORNELL_GLTF).unwrap();
+    std::fs::write(&b, CORNELL_GLTF).unwrap();
+    let (sa, sb) = (Scene::load(&a).unwrap(), Scene::load(&b).unwrap());
+    assert_eq!(scene_hash(&sa), scene_hash(&sb));
+    let mut sc = sa.clone();
+    sc.set_cosn(adaptive_pm::emitter::CosN::new(20.0).unwrap());
+    assert_ne!(scene_hash(&sa), scene_hash(&sc));
+    let mut cfg = small(vec![1_000], 2);
+    cfg.point_samples = 2;
+    cfg.cache_dir = Some(dir.join("cache"));
+    std::fs::create_dir_all(dir.join("cache")).unwrap();
+    let device = Device::new().unwrap();
+    let get = |s: &Scene| {
+        let rt = s.embree_geometry(&device).unwrap();
+        Reference::get(s, &rt, &cfg).unwrap()
+    };
+    let first = get(&sa);
+    assert!(!first.info.cached);
+    let second = get(&sb);
+    assert!(
+        second.info.cached,
+        "same content, other path: from the cache"
+    );
+    assert_eq!(first.indirect, second.indirect);
+    // JSON may round the last bit of a float.
+    for (a, b) in first.irradiance.iter().zip(&second.irradiance) {
+        assert!((a - b).abs() <= 1e-12 * a.abs().max(1e-30), "{a} vs {b}");
+    }
+    assert!(!get(&sc).info.cached, "another exponent: computed anew");
+    let _ = std::fs::remove_dir_all(&dir);
+}
