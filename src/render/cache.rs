@@ -1,67 +1,76 @@
-//! The irradiance cache: irradiance precomputed at a subset of the photons and
-//! read by a single nearest-entry lookup (Christensen, "Faster photon map
-//! global illumination", JGT 1999).
+//! The irradiance cache: irradiance precomputed at a subset of the photons,
+//! averaged into the cells of a hashed grid, read with one hash probe
+//! (Christensen, "Faster photon map global illumination", JGT 1999, for the
+//! precomputed irradiance; a hashed grid for the O(1) lookup, as LuxCore's
+//! PhotonGI and pbrt-v4's SPPM hash their visible points).
 //!
 //! # Build
-//! - **Entries**: every `stride`-th photon of the full map in its kd-tree
-//!   order. Tree order keeps each leaf's few photons together, so this thins
-//!   the photons evenly in space while following their density (where light
-//!   is dense, entries are dense). `1 / stride` entries per stored photon.
+//! - **Samples**: every `stride`-th photon of the full map in its kd-tree
+//!   order (a leaf's few photons sit together, so this thins the photons
+//!   evenly in space while following their density).
 //! - **Normal**: photons do not store one; a ray cast along the photon's own
-//!   direction of travel, from just before its position, finds the surface it
-//!   landed on (one ray per entry). An entry whose surface is not found is
-//!   dropped.
-//! - **Irradiance**: the `k`-nearest estimate of the full map (all depths: the
-//!   light leaving a gather hit includes its direct light) with Jensen's cone
-//!   filter, counting only photons that arrived on the entry's side *and* lie
-//!   in its tangent plane (within [`PLANE_TOLERANCE`] of the scene's
-//!   diagonal), so a wall's photons do not leak onto the floor at a corner.
-//! - **Storage**: each entry is a 16-byte [`crate::photon_map::CompactPhoton`]
-//!   in its own balanced kd-tree: position, irradiance (in the power field,
-//!   shared-exponent RGB, 1/512 relative), the reversed normal (in the
-//!   direction field), and the estimate's radius as a 6-bit log code (in the
-//!   depth field, steps of 2^(1/8)). The cache adds 16 bytes per entry.
+//!   direction of travel, from just before its position, finds the surface
+//!   it landed on (one ray per sample; a sample whose surface is not found is
+//!   dropped).
+//! - **Irradiance** at a sample: the `k`-nearest estimate of the full map (all
+//!   depths: the light leaving a gather hit includes its direct light) with
+//!   Jensen's cone filter, counting only photons that arrived on the sample's
+//!   side *and* lie in its tangent plane (within [`PLANE_TOLERANCE`] of the
+//!   scene's diagonal), so a wall's photons do not leak onto the floor.
+//! - **Cells**: cubes of side `h = r sqrt(3 pi stride / k)` ([`SAMPLES_PER_CELL`]
+//!   = 3 samples where the density is the median one; `h = 0.87 r` at the
+//!   defaults, `r` the median k-nearest radius of the samples), split by the
+//!   normal's dominant axis and sign (six buckets: a floor and a wall meeting
+//!   in one cube stay apart).
+//!   A cell's value is the mean of its samples' irradiances.
+//! - **Storage**: open addressing, at most half full: each slot is 8 bytes, a
+//!   32-bit tag of the cell's key and its irradiance in shared-exponent RGB
+//!   (Ward's RGBE, 1/256 of the largest channel): **16 bytes per cached cell**
+//!   counting the empty slots.
 //!
 //! # Lookup
-//! The nearest entry whose normal is within [`NORMAL_COS`] of the query's and
-//! whose radius covers the query point. Found: its irradiance. None: the
-//! caller falls back to the k-nearest estimate (rare: regions with almost no
-//! photons).
+//! The cell of `x + j` for a jitter `j` uniform in the cube `[-h/2, h/2]^3`
+//! (the caller's random numbers), bucket of the query's normal: one hash
+//! probe, one or two cache lines. The jitter turns the cells' steps into a
+//! tent filter of width `2h` in expectation, so no grid shows in an image; a
+//! jitter that lands in an empty cell (past a surface's edge) retries
+//! without it; a miss then falls back to the k-nearest estimate.
 //!
 //! # Bias
-//! On top of the k-nearest estimate's own bias (blur over the radius `r`,
+//! On top of the k-nearest estimate's own bias (blur over its radius `r`,
 //! and the boundary bias of a disc that runs past a surface's edge), the
-//! lookup moves the estimate by up to the distance to the nearest entry,
-//! about `r sqrt(pi stride / k)` apart: `0.5 r` at the defaults. Both shrink
-//! like `r ~ sqrt(k / N)` as the photon count `N` grows.
+//! cells blur by a tent of width `2h = 1.7 r` at the defaults, and a cell cut by
+//! an edge reads the mean of its part. All of it scales with `r ~ sqrt(k / N)`
+//! and vanishes as the photon count `N` grows; a tag collision (two cells
+//! with one 32-bit tag on one probe chain, odds ~ cells / 2^32 per lookup)
+//! reads a wrong cell.
 
 use super::estimate::Lookup;
 use crate::embree::{CommittedScene, Ray};
 use crate::error::{Error, Result};
-use crate::photon_map::{Neighbor, PhotonMap, PhotonRecord};
+use crate::photon_map::{Neighbor, PhotonMap};
+use crate::rng::mix64;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 use std::time::Instant;
 
-/// Default: one entry per this many photons.
+/// Default: one irradiance sample per this many photons.
 pub const DEFAULT_STRIDE: u32 = 8;
-/// Most photons per entry accepted.
+/// Most photons per sample accepted.
 pub const MAX_STRIDE: u32 = 1 << 16;
-/// Cosine of the largest angle between an entry's normal and the query's.
-pub const NORMAL_COS: f32 = 0.9;
-/// Photons farther than this fraction of the scene's diagonal from an entry's
-/// tangent plane are not counted in its estimate.
+/// Photons farther than this fraction of the scene's diagonal from a
+/// sample's tangent plane are not counted in its estimate.
 pub const PLANE_TOLERANCE: f32 = 1e-3;
-/// An entry covers query points within this many times its estimate's radius.
-pub const COVER: f32 = 1.0;
-/// Radius codes: `r = r_max 2^((code - 63) / 8)`.
-const RADIUS_STEPS_PER_OCTAVE: f32 = 8.0;
+/// Samples expected in a cell where the photon density is the median one:
+/// sets the cell side `h = r sqrt(SAMPLES_PER_CELL pi stride / k)` (`r` the
+/// median k-nearest radius), so that few cells a surface crosses are empty.
+pub const SAMPLES_PER_CELL: f32 = 3.0;
 
 /// How to build a cache.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CacheConfig {
-    /// One entry per `stride` photons (>= 1).
+    /// One irradiance sample per `stride` photons (>= 1).
     pub stride: u32,
     /// Photons per irradiance estimate and the largest radius.
     pub lookup: Lookup,
@@ -77,7 +86,7 @@ impl CacheConfig {
             return Err(Error::param(
                 "cache stride",
                 format!(
-                    "must be in 1..={MAX_STRIDE} photons per cache entry, got {}",
+                    "must be in 1..={MAX_STRIDE} photons per cache sample, got {}",
                     self.stride
                 ),
             ));
@@ -86,25 +95,60 @@ impl CacheConfig {
     }
 }
 
-/// Irradiance at a subset of the photons, read by one nearest lookup.
+/// One slot: a tag of the cell's key (0 = empty) and the irradiance (RGBE).
+#[derive(Clone, Copy, Debug, Default)]
+struct Slot {
+    tag: u32,
+    rgbe: u32,
+}
+
+/// Irradiance in the cells of a hashed grid, read by one probe.
 pub struct IrradianceCache {
-    entries: PhotonMap,
-    max_radius: f32,
-    /// Seconds to build (normals, estimates, kd-tree).
+    slots: Vec<Slot>,
+    mask: usize,
+    origin: Vec3,
+    cell: f32,
+    inv_cell: f32,
+    cells: usize,
+    samples: usize,
+    /// Seconds to build (normals, estimates, table).
     pub build_s: f64,
 }
 
-fn radius_code(r: f32, max_radius: f32) -> u8 {
-    if !(r > 0.0) {
-        return 0;
-    }
-    // Rounded up: the stored radius never under-covers.
-    let c = 63.0 + RADIUS_STEPS_PER_OCTAVE * (r / max_radius).log2();
-    c.ceil().clamp(0.0, 63.0) as u8
+/// Bucket of a unit normal: dominant axis and sign (0..6).
+fn bucket(n: Vec3) -> u64 {
+    let a = n.abs();
+    let (axis, v) = if a.x >= a.y && a.x >= a.z {
+        (0, n.x)
+    } else if a.y >= a.z {
+        (1, n.y)
+    } else {
+        (2, n.z)
+    };
+    axis * 2 + (v < 0.0) as u64
 }
 
-fn radius_of(code: u8, max_radius: f32) -> f32 {
-    max_radius * ((code as f32 - 63.0) / RADIUS_STEPS_PER_OCTAVE).exp2()
+/// Ward's RGBE: 8-bit mantissas sharing the largest channel's exponent.
+fn to_rgbe(c: Vec3) -> u32 {
+    let m = c.max_element();
+    if !(m > 1e-32) || !m.is_finite() {
+        return 0;
+    }
+    let e = m.log2().floor() as i32 + 1;
+    let scale = (-e as f32).exp2() * 256.0;
+    let q = |x: f32| ((x.max(0.0) * scale) as u32).min(255);
+    q(c.x) | (q(c.y) << 8) | (q(c.z) << 16) | (((e + 128).clamp(0, 255) as u32) << 24)
+}
+
+fn from_rgbe(v: u32) -> Vec3 {
+    if v == 0 {
+        return Vec3::ZERO;
+    }
+    let e = (v >> 24) as i32 - 128;
+    let f = ((e - 8) as f32).exp2();
+    // Mantissas were truncated: +0.5 centres the error.
+    let ch = |s: u32| (((v >> s) & 255) as f32 + 0.5) * f;
+    Vec3::new(ch(0), ch(8), ch(16))
 }
 
 impl IrradianceCache {
@@ -125,8 +169,8 @@ impl IrradianceCache {
         let count = full.len().div_ceil(stride);
         let plane = PLANE_TOLERANCE * diagonal;
         let quant = *full.quantizer();
-        let max_radius = cfg.lookup.max_radius;
-        let records: Vec<PhotonRecord> = (0..count)
+        // (position, normal, irradiance, radius) of each sample.
+        let samples: Vec<(Vec3, Vec3, Vec3, f32)> = (0..count)
             .into_par_iter()
             .map_init(
                 || Vec::with_capacity(cfg.lookup.k),
@@ -134,58 +178,123 @@ impl IrradianceCache {
                     let p = full.photon((e * stride) as u32);
                     let n = surface_normal(rt, p.position, p.direction, diagonal)?;
                     let x = p.position;
-                    full.nearest_k_where(x, cfg.lookup.k, max_radius, scratch, |c| {
+                    full.nearest_k_where(x, cfg.lookup.k, cfg.lookup.max_radius, scratch, |c| {
                         c.direction_unnormalised().dot(n) <= 0.0
                             && (quant.position(c) - x).dot(n).abs() <= plane
                     });
                     let (e, r) = cone_irradiance(full, scratch, cfg.lookup);
-                    Some(PhotonRecord {
-                        position: x,
-                        power: e,
-                        direction: -n,
-                        depth: radius_code(r, max_radius),
-                    })
+                    Some((x, n, e, r))
                 },
             )
             .flatten()
             .collect();
-        let entries = PhotonMap::build(&records);
-        Ok(IrradianceCache {
-            entries,
-            max_radius,
-            build_s: t.elapsed().as_secs_f64(),
-        })
+        let mut radii: Vec<f32> = samples.iter().map(|s| s.3).collect();
+        let mid = radii.len() / 2;
+        let median = if radii.is_empty() {
+            cfg.lookup.max_radius
+        } else {
+            *radii.select_nth_unstable_by(mid, f32::total_cmp).1
+        };
+        let fraction = (SAMPLES_PER_CELL * PI * cfg.stride as f32 / cfg.lookup.k as f32).sqrt();
+        let cell = (fraction * median).max(1e-6 * diagonal).max(f32::MIN_POSITIVE);
+        let origin = Vec3::ZERO;
+        let mut cache = IrradianceCache {
+            slots: Vec::new(),
+            mask: 0,
+            origin,
+            cell,
+            inv_cell: 1.0 / cell,
+            cells: 0,
+            samples: samples.len(),
+            build_s: 0.0,
+        };
+        // Keys in sample order, sorted: sums in a fixed order (deterministic).
+        let mut keyed: Vec<(u64, u32)> = samples
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (cache.key(s.0, s.1), i as u32))
+            .collect();
+        keyed.par_sort_unstable();
+        let cells = keyed.chunk_by(|a, b| a.0 == b.0).count();
+        let size = (2 * cells).next_power_of_two().max(2);
+        cache.slots = vec![Slot::default(); size];
+        cache.mask = size - 1;
+        cache.cells = cells;
+        for group in keyed.chunk_by(|a, b| a.0 == b.0) {
+            let sum: Vec3 = group.iter().map(|&(_, i)| samples[i as usize].2).sum();
+            cache.insert(group[0].0, to_rgbe(sum / group.len() as f32));
+        }
+        cache.build_s = t.elapsed().as_secs_f64();
+        Ok(cache)
     }
 
-    /// Number of entries.
+    /// The hashed key of the cell of `x` with normal `n`.
+    fn key(&self, x: Vec3, n: Vec3) -> u64 {
+        let g = ((x - self.origin) * self.inv_cell).floor();
+        // Cells are far fewer than 2^20 per axis in any scene we cache.
+        let c = |v: f32| (v.clamp(-1e15, 1e15) as i64 as u64) & 0x1F_FFFF;
+        mix64(c(g.x) | (c(g.y) << 21) | (c(g.z) << 42) | (bucket(n) << 61))
+    }
+
+    fn insert(&mut self, key: u64, rgbe: u32) {
+        let tag = (key >> 32) as u32 | 1;
+        let mut i = key as usize & self.mask;
+        while self.slots[i].tag != 0 {
+            i = (i + 1) & self.mask;
+        }
+        self.slots[i] = Slot { tag, rgbe };
+    }
+
+    fn probe(&self, key: u64) -> Option<Vec3> {
+        let tag = (key >> 32) as u32 | 1;
+        let mut i = key as usize & self.mask;
+        loop {
+            let s = self.slots.get(i)?;
+            if s.tag == tag {
+                return Some(from_rgbe(s.rgbe));
+            }
+            if s.tag == 0 {
+                return None;
+            }
+            i = (i + 1) & self.mask;
+        }
+    }
+
+    /// Cells holding a value.
     pub fn len(&self) -> usize {
-        self.entries.len()
+        self.cells
     }
 
-    /// True when the cache has no entry.
+    /// True when the cache has no cell.
     pub fn is_empty(&self) -> bool {
-        self.entries.is_empty()
+        self.cells == 0
     }
 
-    /// Bytes per entry (the kd-tree's photon size).
+    /// Irradiance samples that went into the cells.
+    pub fn samples(&self) -> usize {
+        self.samples
+    }
+
+    /// Cell side (world units).
+    pub fn cell_size(&self) -> f32 {
+        self.cell
+    }
+
+    /// Bytes per cached cell: the table's bytes over its cells (8-byte slots,
+    /// at most half full).
     pub fn bytes_per_entry(&self) -> usize {
-        self.entries.bytes_per_photon()
+        (self.slots.len() * std::mem::size_of::<Slot>()).div_ceil(self.cells.max(1))
     }
 
-    /// The irradiance at `x` (unit normal `n`) from the nearest covering entry.
-    pub fn irradiance(&self, x: Vec3, n: Vec3, scratch: &mut Vec<Neighbor>) -> Option<Vec3> {
-        let quant = self.entries.quantizer();
-        let max_radius = self.max_radius;
-        self.entries
-            .nearest_k_where(x, 1, max_radius * COVER, scratch, |c| {
-                let d = c.direction();
-                if -d.dot(n) < NORMAL_COS {
-                    return false;
-                }
-                let r = radius_of(c.depth(), max_radius) * COVER;
-                (quant.position(c) - x).length_squared() <= r * r
-            });
-        scratch.first().map(|nb| self.entries.photon(nb.index).power)
+    /// The irradiance at `x` (unit normal `n`): the cell of `x` moved by the
+    /// jitter `(u - 0.5) h` (`u` in `[0, 1)^3`), else the cell of `x`.
+    pub fn irradiance(&self, x: Vec3, n: Vec3, u: [f32; 3]) -> Option<Vec3> {
+        if self.cells == 0 {
+            return None;
+        }
+        let j = (Vec3::from(u) - Vec3::splat(0.5)) * self.cell;
+        self.probe(self.key(x + j, n))
+            .or_else(|| self.probe(self.key(x, n)))
     }
 }
 
@@ -231,12 +340,21 @@ mod tests {
     use super::*;
 
     #[test]
-    fn radius_codes_round_up_within_an_eighth_octave() {
-        let max = 10.0;
-        for r in [0.1f32, 0.37, 1.0, 4.2, 9.99] {
-            let back = radius_of(radius_code(r, max), max);
-            assert!(back >= r * 0.9999 && back <= r * 1.0905 + 1e-6, "{r} -> {back}");
+    fn rgbe_keeps_three_significant_digits() {
+        for c in [Vec3::new(1.0, 0.5, 0.25), Vec3::new(1e-6, 3e-6, 0.0), Vec3::splat(12345.0)] {
+            let back = from_rgbe(to_rgbe(c));
+            let err = (back - c).abs().max_element() / c.max_element();
+            assert!(err <= 1.0 / 256.0 + 1e-6, "{c} -> {back}");
         }
-        assert_eq!(radius_code(20.0, max), 63);
+        assert_eq!(from_rgbe(to_rgbe(Vec3::ZERO)), Vec3::ZERO);
+    }
+
+    #[test]
+    fn buckets_split_the_six_axis_directions() {
+        let dirs = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+        let mut b: Vec<u64> = dirs.iter().map(|&d| bucket(d)).collect();
+        b.sort_unstable();
+        b.dedup();
+        assert_eq!(b.len(), 6);
     }
 }

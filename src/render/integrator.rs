@@ -173,10 +173,17 @@ impl<'a> Ctx<'a> {
 
     /// Radiance leaving a gather hit `y`: the cache's irradiance times
     /// `albedo / pi` on a diffuse surface, else the full map's estimate.
-    fn cached_radiance(&self, maps: &RenderMaps, y: &SurfaceHit, sc: &mut Scratch) -> Vec3 {
+    fn cached_radiance(
+        &self,
+        maps: &RenderMaps,
+        y: &SurfaceHit,
+        rng: &mut Rng,
+        sc: &mut Scratch,
+    ) -> Vec3 {
         if let (Some(cache), Brdf::Lambert(l)) = (self.cache, &y.material.brdf) {
             let t = Instant::now();
-            let e = cache.irradiance(y.position, y.normal, &mut sc.neighbors);
+            let [u0, u1] = rng.next_2d();
+            let e = cache.irradiance(y.position, y.normal, [u0, u1, rng.next_f32()]);
             sc.lookup_ns += t.elapsed().as_nanos() as u64;
             if let Some(e) = e {
                 sc.hits += 1;
@@ -215,7 +222,7 @@ impl<'a> Ctx<'a> {
             // after a mirror it is a caustic only the gather finds.
             let mut emitted = Vec3::ZERO;
             if let Some(y) = self.trace(ray, 1, rng, &mut emitted) {
-                sum += bs.weight * y.throughput * self.cached_radiance(maps, &y, sc);
+                sum += bs.weight * y.throughput * self.cached_radiance(maps, &y, rng, sc);
             }
             sum += bs.weight * emitted;
         }
