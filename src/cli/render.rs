@@ -5,8 +5,8 @@ use super::common::{open_scene, progress_bar, BudgetArgs, ThreadArgs};
 use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Mode, Tracer};
 use adaptive_pm::render::{
-    cache::DEFAULT_STRIDE, check_output_path, render_with, RenderConfig, RenderMaps, ToneMap,
-    View, DEFAULT_GATHER, DEFAULT_K,
+    cache::DEFAULT_STRIDE, check_output_path, render_path, render_with, Integrator, PathHalves,
+    PathPart, RenderConfig, RenderMaps, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
 };
 use serde_json::json;
 use std::path::PathBuf;
@@ -20,6 +20,9 @@ pub struct RenderArgs {
     /// classic (Markov chains), density (density control) or adaptive (the paper).
     #[arg(long, default_value = "adaptive")]
     pub mode: Mode,
+    /// photon (direct light + photon map) or path (unbiased path tracer, no photons).
+    #[arg(long, default_value = "photon")]
+    pub integrator: Integrator,
     #[command(flatten)]
     pub budget: BudgetArgs,
     #[command(flatten)]
@@ -98,6 +101,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let device = Device::new()?;
     let rt = scene.commit(&device)?;
     let bar = progress_bar(!args.json);
+    if args.integrator == Integrator::Path {
+        return run_path(&args, &scene, &rt, &cfg, &pool);
+    }
     let (maps, trace_s, photons): (Option<RenderMaps>, f64, usize) = if view == View::DirectOnly {
         (None, 0.0, 0)
     } else {
@@ -177,15 +183,68 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             args.spp,
             args.final_gather
         );
-        println!(
-            "{:.0} samples/s, lookups {:.3} s (thread sum), cache {} entries built in {:.3} s",
-            samples_per_s, stats.lookup_s, stats.cache_entries, stats.cache_build_s
-        );
+        let (cache_n, cache_s) = (stats.cache_entries, stats.cache_build_s);
+        println!("{samples_per_s:.0} samples/s, lookups {:.3} s (thread sum), cache {cache_n} cells built in {cache_s:.3} s", stats.lookup_s);
         println!("mean RGB {:.4} {:.4} {:.4}", mean.x, mean.y, mean.z);
         println!("wrote {}", args.out.display());
         if let Some(p) = &args.png {
             println!("wrote {}", p.display());
         }
+    }
+    Ok(())
+}
+
+/// `--integrator path`: the image from two independent halves, and its noise.
+fn run_path(
+    args: &RenderArgs,
+    scene: &adaptive_pm::scene::Scene,
+    rt: &adaptive_pm::embree::CommittedScene,
+    cfg: &RenderConfig,
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<()> {
+    let part = match cfg.view {
+        View::Full => PathPart::Full,
+        View::DirectOnly => PathPart::Direct,
+        View::Map { .. } => anyhow::bail!("--visualize-map needs --integrator photon"),
+    };
+    let t = Instant::now();
+    let image = if cfg.spp >= 2 {
+        let mut half = cfg.clone();
+        half.spp = cfg.spp / 2;
+        let h = pool.install(|| PathHalves::render(scene, rt, &half, part))?;
+        let noise = h.noise_rel(None);
+        eprintln!(
+            "path tracer noise (two halves): {:.3} % rms of the mean",
+            100.0 * noise
+        );
+        h.mean()
+    } else {
+        pool.install(|| render_path(scene, rt, cfg, part, &|_, _| {}))?
+    };
+    let secs = t.elapsed().as_secs_f64();
+    image.write_exr(&args.out)?;
+    if let Some(p) = &args.png {
+        image.write_png(
+            p,
+            ToneMap {
+                exposure: args.exposure,
+            },
+        )?;
+    }
+    let m = image.mean();
+    if args.json {
+        println!(
+            "{}",
+            json!({"scene": args.scene, "integrator": "path", "width": args.width,
+            "height": args.height, "spp": cfg.spp, "render_s": secs,
+            "mean_rgb": [m.x, m.y, m.z], "out": args.out})
+        );
+    } else {
+        println!(
+            "path on {}: render {secs:.3} s, mean RGB {:.4} {:.4} {:.4}",
+            args.scene, m.x, m.y, m.z
+        );
+        println!("wrote {}", args.out.display());
     }
     Ok(())
 }

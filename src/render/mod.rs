@@ -75,8 +75,12 @@ pub mod estimate;
 pub mod image;
 mod integrator;
 pub mod metrics;
+pub mod path;
+mod path_light;
+mod path_render;
 mod quadrature;
 pub mod sampler;
+pub mod study;
 
 pub use cache::{CacheConfig, IrradianceCache};
 pub use camera::CameraRays;
@@ -85,6 +89,8 @@ pub use estimate::{irradiance_default, irradiance_estimate, radiance_estimate, E
 pub use image::{check_output_path, Image, ToneMap, MAX_DIMENSION};
 pub use integrator::{render, render_with, RenderStats};
 pub use metrics::{mean_bias, relative_rmse, relative_rmse_masked, rmse};
+pub use path::{Integrator, PathPart, PathTracer};
+pub use path_render::{indirect_irradiance, light_pixels, render_path, PathHalves};
 pub use quadrature::{floor_points, quadrature_irradiance};
 
 use crate::error::{Error, Result};

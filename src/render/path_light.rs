@@ -1,0 +1,95 @@
+//! Next-event estimation of the path tracer: one sample of every light from
+//! a surface point, area lights weighted against BRDF sampling by the power
+//! heuristic (see [`super::path`]).
+
+use super::path::{power_heuristic, PathTracer};
+use crate::brdf::Brdf;
+use crate::embree::Ray;
+use crate::rng::Rng;
+use crate::sampling::Frame;
+use crate::scene::Light;
+use glam::Vec3;
+
+/// Shadow rays stop this fraction of their length short of either end.
+const SHADOW_EPS: f32 = 1e-4;
+
+/// Solid-angle pdf, seen from `from`, of an area-uniform sample at `at` on a
+/// light of total area `area` whose cosine towards `from` is `cos_l`.
+pub(super) fn area_light_pdf(from: Vec3, at: Vec3, cos_l: f32, area: f32) -> f32 {
+    let d2 = (at - from).length_squared();
+    if cos_l > 0.0 && area > 0.0 {
+        d2 / (cos_l * area)
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// Radiance reflected at `x` (unit normal `n` on the ray's side) towards `wo`
+/// by one sample of each light, shadow rays included.
+pub(super) fn next_event(
+    pt: &PathTracer,
+    brdf: &Brdf,
+    [x, n, wo]: [Vec3; 3],
+    rng: &mut Rng,
+) -> Vec3 {
+    let frame = Frame::from_normal(n);
+    let wo_l = frame.local_from_world(wo);
+    let origin = x + n * pt.eps;
+    let mut sum = Vec3::ZERO;
+    for light in &pt.scene.lights {
+        // (light point, incoming radiance or intensity / r^2 over the pdf, MIS weight input)
+        let (p, li, pdf_l) = match light {
+            Light::Area(a) => {
+                let e = a.sample(rng.next_f32(), rng.next_2d(), [0.5, 0.5]);
+                let Some(n_l) = e.normal else { continue };
+                let d = x - e.origin;
+                let r2 = d.length_squared();
+                if !(r2 > 0.0) {
+                    continue;
+                }
+                let cos_l = n_l.dot(d) / r2.sqrt();
+                if cos_l <= 0.0 {
+                    continue;
+                }
+                let le = a.emission.radiance * a.emission.profile.eval(Vec3::new(0.0, 0.0, cos_l));
+                let pdf = area_light_pdf(x, e.origin, cos_l, a.area);
+                (e.origin, le / pdf, Some(pdf))
+            }
+            Light::Point(p) => {
+                let r2 = (x - p.position).length_squared();
+                if !(r2 > 0.0) {
+                    continue;
+                }
+                (p.position, p.intensity / r2, None)
+            }
+            Light::Spot(s) => {
+                let d = x - s.position;
+                let r2 = d.length_squared();
+                if !(r2 > 0.0) {
+                    continue;
+                }
+                let f = s.falloff(s.direction.dot(d) / r2.sqrt());
+                (s.position, s.intensity * f / r2, None)
+            }
+        };
+        let wi = (p - x).normalize_or_zero();
+        let cos_x = wi.dot(n);
+        if cos_x <= 0.0 || !(li.max_element() > 0.0) {
+            continue;
+        }
+        let wi_l = frame.local_from_world(wi);
+        let f = brdf.eval(wi_l, wo_l);
+        if !(f.max_element() > 0.0) {
+            continue;
+        }
+        if pt.rt.occluded(&Ray::segment(origin, p, SHADOW_EPS)) {
+            continue;
+        }
+        let w = match pdf_l {
+            Some(pdf_l) => power_heuristic(pdf_l, brdf.pdf(wo_l, wi_l)),
+            None => 1.0,
+        };
+        sum += f * li * (cos_x * w);
+    }
+    sum
+}
