@@ -39,7 +39,10 @@ fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
     let cache = IrradianceCache::build(&maps.full, &rt, (hi - lo).length(), &cache_cfg).unwrap();
     assert!(cache.bytes_per_entry() <= 16, "{}", cache.bytes_per_entry());
     let samples_per_photon = cache.samples() as f64 / maps.full.len() as f64;
-    assert!((samples_per_photon - 1.0 / 8.0).abs() < 0.01, "{samples_per_photon}");
+    assert!(
+        (samples_per_photon - 1.0 / 8.0).abs() < 0.01,
+        "{samples_per_photon}"
+    );
     assert!(cache.len() > 100 && cache.len() <= cache.samples());
 
     let pts = floor_points(&scene, "floor", 12, 12, 0.1);
@@ -102,7 +105,9 @@ fn bad_values_of_the_new_options_are_clear_errors() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("x.exr");
         let o = Command::new(env!("CARGO_BIN_EXE_adaptive-pm"))
-            .args(["render", "cornell", "--width", "4", "--height", "4", flag, value])
+            .args([
+                "render", "cornell", "--width", "4", "--height", "4", flag, value,
+            ])
             .arg("--out")
             .arg(&out)
             .output()
@@ -119,7 +124,9 @@ fn render_json_has_the_throughput_keys() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.exr");
     let o = Command::new(env!("CARGO_BIN_EXE_adaptive-pm"))
-        .args(["render", "cornell", "--n-max", "5000", "--width", "8", "--height", "8"])
+        .args([
+            "render", "cornell", "--n-max", "5000", "--width", "8", "--height", "8",
+        ])
         .args(["--spp", "2", "--json", "--out"])
         .arg(&out)
         .output()
@@ -127,7 +134,9 @@ fn render_json_has_the_throughput_keys() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     for key in ["samples_per_s", "lookup_s", "cache_build_s"] {
-        let x = v[key].as_f64().unwrap_or_else(|| panic!("no number `{key}` in {v}"));
+        let x = v[key]
+            .as_f64()
+            .unwrap_or_else(|| panic!("no number `{key}` in {v}"));
         assert!(x.is_finite() && x >= 0.0, "{key} = {x}");
     }
     assert!(v["samples_per_s"].as_f64().unwrap() > 0.0);

@@ -12,21 +12,24 @@
 //!   direction of travel, from just before its position, finds the surface
 //!   it landed on (one ray per sample; a sample whose surface is not found is
 //!   dropped).
-//! - **Irradiance** at a sample: the `k`-nearest estimate of the full map (all
+//! - **Irradiance** at a point: the `k`-nearest estimate of the full map (all
 //!   depths: the light leaving a gather hit includes its direct light) with
 //!   Jensen's cone filter, counting only photons that arrived on the sample's
 //!   side *and* lie in its tangent plane (within [`PLANE_TOLERANCE`] of the
 //!   scene's diagonal), so a wall's photons do not leak onto the floor.
 //! - **Cells**: cubes of side `h = r sqrt(3 pi stride / k)` ([`SAMPLES_PER_CELL`]
 //!   = 3 samples where the density is the median one; `h = 0.87 r` at the
-//!   defaults, `r` the median k-nearest radius of the samples), split by the
-//!   normal's dominant axis and sign (six buckets: a floor and a wall meeting
-//!   in one cube stay apart).
+//!   defaults, `r` the median k-nearest radius of 1024 spread samples), split
+//!   by the normal's dominant axis and sign (six buckets: a floor and a wall
+//!   meeting in one cube stay apart). A finest cell's value is the estimate
+//!   at its first sample (one k-nearest search per cell, not per sample).
 //!   A cell's value is the mean of its samples' irradiances.
-//! - **Storage**: open addressing, at most half full: each slot is 8 bytes, a
-//!   32-bit tag of the cell's key and its irradiance in shared-exponent RGB
-//!   (Ward's RGBE, 1/256 of the largest channel): **16 bytes per cached cell**
-//!   counting the empty slots.
+//! - **Levels**: the same at sides `2h` to `16h` ([`LEVELS`]): where photons
+//!   are sparse, a lookup reads a coarser cell instead of an empty one.
+//! - **Storage**: open addressing, half full: each slot is 8 bytes, a 32-bit
+//!   tag of the cell's key and its irradiance in shared-exponent RGB (Ward's
+//!   RGBE, 1/256 of the largest channel): **16 bytes per cached cell**
+//!   counting the empty slots; cells of all levels ~ 1.3 x the finest's.
 //!
 //! # Lookup
 //! The cell of `x + j` for a jitter `j` uniform in the cube `[-h/2, h/2]^3`
@@ -34,7 +37,8 @@
 //! probe, one or two cache lines. The jitter turns the cells' steps into a
 //! tent filter of width `2h` in expectation, so no grid shows in an image; a
 //! jitter that lands in an empty cell (past a surface's edge) retries
-//! without it; a miss then falls back to the k-nearest estimate.
+//! without it, then at the coarser levels; a miss at every level falls back
+//! to the k-nearest estimate.
 //!
 //! # Bias
 //! On top of the k-nearest estimate's own bias (blur over its radius `r`,
@@ -66,6 +70,10 @@ pub const PLANE_TOLERANCE: f32 = 1e-3;
 /// sets the cell side `h = r sqrt(SAMPLES_PER_CELL pi stride / k)` (`r` the
 /// median k-nearest radius), so that few cells a surface crosses are empty.
 pub const SAMPLES_PER_CELL: f32 = 3.0;
+/// Levels of cells (side `h`, `2h`, ... `16h`): a lookup reads the finest level
+/// whose cell holds samples, so where photons are sparse it reads a coarser
+/// cell instead of falling back to the k-nearest search.
+pub const LEVELS: u32 = 5;
 
 /// How to build a cache.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -105,7 +113,6 @@ struct Slot {
 /// Irradiance in the cells of a hashed grid, read by one probe.
 pub struct IrradianceCache {
     slots: Vec<Slot>,
-    mask: usize,
     origin: Vec3,
     cell: f32,
     inv_cell: f32,
@@ -170,25 +177,32 @@ impl IrradianceCache {
         let plane = PLANE_TOLERANCE * diagonal;
         let quant = *full.quantizer();
         // (position, normal, irradiance, radius) of each sample.
-        let samples: Vec<(Vec3, Vec3, Vec3, f32)> = (0..count)
+        // Sample points and their surface normals (one ray each).
+        let samples: Vec<(Vec3, Vec3)> = (0..count)
             .into_par_iter()
+            .filter_map(|e| {
+                let p = full.photon((e * stride) as u32);
+                let n = surface_normal(rt, p.position, p.direction, diagonal)?;
+                Some((p.position, n))
+            })
+            .collect();
+        let estimate = |scratch: &mut Vec<Neighbor>, (x, n): (Vec3, Vec3)| {
+            full.nearest_k_where(x, cfg.lookup.k, cfg.lookup.max_radius, scratch, |c| {
+                c.direction_unnormalised().dot(n) <= 0.0
+                    && (quant.position(c) - x).dot(n).abs() <= plane
+            });
+            cone_irradiance(full, scratch, cfg.lookup)
+        };
+        // The cell side from the median radius of a spread subset of samples.
+        let probe_step = (samples.len() / 1024).max(1);
+        let mut radii: Vec<f32> = samples
+            .par_iter()
+            .step_by(probe_step)
             .map_init(
                 || Vec::with_capacity(cfg.lookup.k),
-                |scratch, e| {
-                    let p = full.photon((e * stride) as u32);
-                    let n = surface_normal(rt, p.position, p.direction, diagonal)?;
-                    let x = p.position;
-                    full.nearest_k_where(x, cfg.lookup.k, cfg.lookup.max_radius, scratch, |c| {
-                        c.direction_unnormalised().dot(n) <= 0.0
-                            && (quant.position(c) - x).dot(n).abs() <= plane
-                    });
-                    let (e, r) = cone_irradiance(full, scratch, cfg.lookup);
-                    Some((x, n, e, r))
-                },
+                |sc, &s| estimate(sc, s).1,
             )
-            .flatten()
             .collect();
-        let mut radii: Vec<f32> = samples.iter().map(|s| s.3).collect();
         let mid = radii.len() / 2;
         let median = if radii.is_empty() {
             cfg.lookup.max_radius
@@ -196,11 +210,15 @@ impl IrradianceCache {
             *radii.select_nth_unstable_by(mid, f32::total_cmp).1
         };
         let fraction = (SAMPLES_PER_CELL * PI * cfg.stride as f32 / cfg.lookup.k as f32).sqrt();
-        let cell = (fraction * median).max(1e-6 * diagonal).max(f32::MIN_POSITIVE);
-        let origin = Vec3::ZERO;
+        let cell = (fraction * median)
+            .max(1e-6 * diagonal)
+            .max(f32::MIN_POSITIVE);
+        // Cell faces off the round coordinates that walls sit on (a floor at
+        // y = 0 on a face would split its samples and lookups by the sign of
+        // rounding errors): every level's faces are >= 0.14 h from 0.
+        let origin = Vec3::new(0.3183, 0.2718, 0.1414) * cell;
         let mut cache = IrradianceCache {
             slots: Vec::new(),
-            mask: 0,
             origin,
             cell,
             inv_cell: 1.0 / cell,
@@ -208,46 +226,82 @@ impl IrradianceCache {
             samples: samples.len(),
             build_s: 0.0,
         };
-        // Keys in sample order, sorted: sums in a fixed order (deterministic).
-        let mut keyed: Vec<(u64, u32)> = samples
+        // Finest cells: one k-nearest estimate each, at its first sample
+        // (keys sorted with the sample index: a fixed choice whatever the
+        // thread count). Every sample then carries its cell's value.
+        let mut fine: Vec<(u64, u32)> = samples
             .iter()
             .enumerate()
-            .map(|(i, s)| (cache.key(s.0, s.1), i as u32))
+            .map(|(i, s)| (cache.key(s.0, s.1, 0), i as u32))
+            .collect();
+        fine.par_sort_unstable();
+        let groups: Vec<&[(u64, u32)]> = fine.chunk_by(|a, b| a.0 == b.0).collect();
+        let values: Vec<Vec3> = groups
+            .par_iter()
+            .map_init(
+                || Vec::with_capacity(cfg.lookup.k),
+                |sc, g| estimate(sc, samples[g[0].1 as usize]).0,
+            )
+            .collect();
+        let mut value = vec![Vec3::ZERO; samples.len()];
+        for (g, v) in groups.iter().zip(&values) {
+            for &(_, i) in g.iter() {
+                value[i as usize] = *v;
+            }
+        }
+        // Coarser cells: the mean over their samples.
+        let mut keyed: Vec<(u64, u32)> = (1..LEVELS)
+            .flat_map(|level| {
+                let cache = &cache;
+                samples
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, s)| (cache.key(s.0, s.1, level), i as u32))
+            })
             .collect();
         keyed.par_sort_unstable();
-        let cells = keyed.chunk_by(|a, b| a.0 == b.0).count();
-        let size = (2 * cells).next_power_of_two().max(2);
-        cache.slots = vec![Slot::default(); size];
-        cache.mask = size - 1;
+        let coarse = keyed.chunk_by(|a, b| a.0 == b.0).count();
+        let cells = groups.len() + coarse;
+        // Half full: 16 bytes per cell with 8-byte slots.
+        cache.slots = vec![Slot::default(); (2 * cells).max(2)];
         cache.cells = cells;
+        for (g, v) in groups.iter().zip(&values) {
+            cache.insert(g[0].0, to_rgbe(*v));
+        }
         for group in keyed.chunk_by(|a, b| a.0 == b.0) {
-            let sum: Vec3 = group.iter().map(|&(_, i)| samples[i as usize].2).sum();
+            let sum: Vec3 = group.iter().map(|&(_, i)| value[i as usize]).sum();
             cache.insert(group[0].0, to_rgbe(sum / group.len() as f32));
         }
         cache.build_s = t.elapsed().as_secs_f64();
         Ok(cache)
     }
 
-    /// The hashed key of the cell of `x` with normal `n`.
-    fn key(&self, x: Vec3, n: Vec3) -> u64 {
-        let g = ((x - self.origin) * self.inv_cell).floor();
-        // Cells are far fewer than 2^20 per axis in any scene we cache.
-        let c = |v: f32| (v.clamp(-1e15, 1e15) as i64 as u64) & 0x1F_FFFF;
-        mix64(c(g.x) | (c(g.y) << 21) | (c(g.z) << 42) | (bucket(n) << 61))
+    /// The hashed key of the cell of `x` with normal `n` at `level` (side `h 2^level`).
+    fn key(&self, x: Vec3, n: Vec3, level: u32) -> u64 {
+        let g = ((x - self.origin) * (self.inv_cell / (1u32 << level) as f32)).floor();
+        // Keys wrap every 2^19 cells per axis: far more than any scene we cache.
+        let c = |v: f32| (v.clamp(-1e15, 1e15) as i64 as u64) & 0x7_FFFF;
+        let meta = bucket(n) | ((level as u64) << 3);
+        mix64(c(g.x) | (c(g.y) << 19) | (c(g.z) << 38) | (meta << 57))
+    }
+
+    /// First slot of `key`'s probe chain (multiply-shift onto the table).
+    fn home(&self, key: u64) -> usize {
+        ((key as u32 as u64 * self.slots.len() as u64) >> 32) as usize
     }
 
     fn insert(&mut self, key: u64, rgbe: u32) {
         let tag = (key >> 32) as u32 | 1;
-        let mut i = key as usize & self.mask;
+        let mut i = self.home(key);
         while self.slots[i].tag != 0 {
-            i = (i + 1) & self.mask;
+            i = if i + 1 == self.slots.len() { 0 } else { i + 1 };
         }
         self.slots[i] = Slot { tag, rgbe };
     }
 
     fn probe(&self, key: u64) -> Option<Vec3> {
         let tag = (key >> 32) as u32 | 1;
-        let mut i = key as usize & self.mask;
+        let mut i = self.home(key);
         loop {
             let s = self.slots.get(i)?;
             if s.tag == tag {
@@ -256,7 +310,7 @@ impl IrradianceCache {
             if s.tag == 0 {
                 return None;
             }
-            i = (i + 1) & self.mask;
+            i = if i + 1 == self.slots.len() { 0 } else { i + 1 };
         }
     }
 
@@ -286,15 +340,19 @@ impl IrradianceCache {
         (self.slots.len() * std::mem::size_of::<Slot>()).div_ceil(self.cells.max(1))
     }
 
-    /// The irradiance at `x` (unit normal `n`): the cell of `x` moved by the
-    /// jitter `(u - 0.5) h` (`u` in `[0, 1)^3`), else the cell of `x`.
+    /// The irradiance at `x` (unit normal `n`): at the finest level that has
+    /// one, the cell of `x` moved by the jitter `(u - 0.5) h 2^level` (`u` in
+    /// `[0, 1)^3`), else the cell of `x` itself.
     pub fn irradiance(&self, x: Vec3, n: Vec3, u: [f32; 3]) -> Option<Vec3> {
         if self.cells == 0 {
             return None;
         }
         let j = (Vec3::from(u) - Vec3::splat(0.5)) * self.cell;
-        self.probe(self.key(x + j, n))
-            .or_else(|| self.probe(self.key(x, n)))
+        (0..LEVELS).find_map(|level| {
+            let jl = j * (1u32 << level) as f32;
+            self.probe(self.key(x + jl, n, level))
+                .or_else(|| self.probe(self.key(x, n, level)))
+        })
     }
 }
 
@@ -341,7 +399,11 @@ mod tests {
 
     #[test]
     fn rgbe_keeps_three_significant_digits() {
-        for c in [Vec3::new(1.0, 0.5, 0.25), Vec3::new(1e-6, 3e-6, 0.0), Vec3::splat(12345.0)] {
+        for c in [
+            Vec3::new(1.0, 0.5, 0.25),
+            Vec3::new(1e-6, 3e-6, 0.0),
+            Vec3::splat(12345.0),
+        ] {
             let back = from_rgbe(to_rgbe(c));
             let err = (back - c).abs().max_element() / c.max_element();
             assert!(err <= 1.0 / 256.0 + 1e-6, "{c} -> {back}");

@@ -246,7 +246,13 @@ impl<'a> Ctx<'a> {
         sum / l as f32
     }
 
-    fn radiance(&self, ray: Ray, px: (&PixelSampler, u32), rng: &mut Rng, sc: &mut Scratch) -> Vec3 {
+    fn radiance(
+        &self,
+        ray: Ray,
+        px: (&PixelSampler, u32),
+        rng: &mut Rng,
+        sc: &mut Scratch,
+    ) -> Vec3 {
         let mut l = Vec3::ZERO;
         let first = if self.show_emitters { 0 } else { u32::MAX };
         let Some(s) = self.trace(ray, first, rng, &mut l) else {
@@ -317,7 +323,9 @@ pub fn render_with(
         max_radius,
     };
     let built = match (cache, maps) {
-        (None, Some(m)) if cfg.cache_stride > 0 && cfg.final_gather > 0 && cfg.view == View::Full => {
+        (None, Some(m))
+            if cfg.cache_stride > 0 && cfg.final_gather > 0 && cfg.view == View::Full =>
+        {
             let (lo, hi) = scene.bounds();
             let c = CacheConfig {
                 stride: cfg.cache_stride,

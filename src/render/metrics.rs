@@ -73,7 +73,11 @@ pub fn relative_rmse_masked(a: &Image, reference: &Image, keep: &[bool]) -> Resu
     }
     let n = (3 * n.max(1)) as f64;
     let mean = sum / n;
-    Ok(if mean > 0.0 { (se / n).sqrt() / mean } else { 0.0 })
+    Ok(if mean > 0.0 {
+        (se / n).sqrt() / mean
+    } else {
+        0.0
+    })
 }
 
 /// Per-channel relative difference of the means over the kept pixels:

@@ -151,7 +151,10 @@ mod tests {
         let mut worst = 0.0f64;
         for pixel in 0..50u64 {
             let s = PixelSampler::new(hash2(7, pixel));
-            let m: f64 = (0..64).map(|i| f(s.get_2d(dim::GATHER, i, 64)) as f64).sum::<f64>() / 64.0;
+            let m: f64 = (0..64)
+                .map(|i| f(s.get_2d(dim::GATHER, i, 64)) as f64)
+                .sum::<f64>()
+                / 64.0;
             worst = worst.max((m - exact).abs());
         }
         // Independent points: sd ~ 0.33 / 8 = 0.04; the net stays far below.

@@ -149,7 +149,10 @@ pub fn run_study(
     let t = Instant::now();
     let path = render_path(scene, rt, &pc, PathPart::Full, &|_, _| {})?;
     let path_s = t.elapsed().as_secs_f64();
-    let path_err = noise_free(relative_rmse_masked(&path, &reference, &keep)?, reference_noise);
+    let path_err = noise_free(
+        relative_rmse_masked(&path, &reference, &keep)?,
+        reference_noise,
+    );
     let path_time = path_s * (path_err / cfg.target).powi(2);
     log(&format!(
         "path: {} spp in {path_s:.2} s, relRMSE {:.2} % -> {:.0} % in {path_time:.1} s",

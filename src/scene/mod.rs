@@ -249,7 +249,9 @@ impl Scene {
     /// mesh's vertex count.
     pub fn set_vertex_normals(&mut self, mesh: usize, normals: Vec<Vec3>) -> Result<()> {
         let Some(m) = self.meshes.get_mut(mesh) else {
-            return Err(Error::InvalidScene(format!("no mesh {mesh} to give normals")));
+            return Err(Error::InvalidScene(format!(
+                "no mesh {mesh} to give normals"
+            )));
         };
         if normals.len() != m.positions.len() {
             return Err(Error::InvalidScene(format!(
