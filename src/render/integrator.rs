@@ -1,66 +1,45 @@
-//! The per-pixel estimator (see the module docs of [`super`]): rows of pixels
-//! in parallel, each sample with its own counter-based random stream and the
-//! pixel's stratified points ([`super::sampler`]).
+//! The per-sample estimator (see the module docs of [`super`]): each sample
+//! with its own counter-based random stream and the pixel's stratified
+//! points ([`super::sampler`]). The image loop is in [`super::run`].
 
-use super::cache::{CacheConfig, IrradianceCache};
-use super::camera::CameraRays;
+use super::cache::IrradianceCache;
 use super::direct::LightSampler;
 use super::estimate::{radiance_estimate, Lookup};
 use super::sampler::{dim, PixelSampler};
-use super::{default_max_radius, ray_epsilon, Image, RenderConfig, RenderMaps, View, MAX_SPECULAR};
+use super::{RenderMaps, View, MAX_SPECULAR};
 use crate::brdf::Brdf;
 use crate::embree::{CommittedScene, Hit, Ray};
-use crate::error::{Error, Result};
+use crate::engine::albedo::AlbedoTable;
 use crate::photon_map::{Neighbor, PhotonMap};
-use crate::rng::{hash2, Rng};
+use crate::rng::Rng;
 use crate::sampling::Frame;
 use crate::scene::{Material, Scene};
 use glam::Vec3;
-use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-/// What a render measured besides its image.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RenderStats {
-    /// Camera samples taken.
-    pub samples: u64,
-    /// Seconds spent in photon-map and cache lookups, summed over threads.
-    pub lookup_s: f64,
-    /// Lookups answered by the cache.
-    pub cache_hits: u64,
-    /// Lookups that fell back to the k-nearest estimate.
-    pub cache_misses: u64,
-    /// Seconds to build the irradiance cache (0 when none was built here).
-    pub cache_build_s: f64,
-    /// Entries of the cache read (0 without one).
-    pub cache_entries: usize,
-    /// Bytes per cache entry (0 without one).
-    pub cache_bytes_per_entry: usize,
+pub(super) struct Ctx<'a> {
+    pub(super) scene: &'a Scene,
+    pub(super) rt: &'a CommittedScene,
+    pub(super) maps: Option<&'a RenderMaps>,
+    pub(super) cache: Option<&'a IrradianceCache>,
+    pub(super) lights: LightSampler<'a>,
+    /// Directional albedo of each material (glossy gather hits).
+    pub(super) albedo: Vec<AlbedoTable>,
+    pub(super) view: View,
+    pub(super) gather: u32,
+    pub(super) light_samples: u32,
+    pub(super) spp: u32,
+    pub(super) lookup: Lookup,
+    pub(super) eps: f32,
+    pub(super) show_emitters: bool,
 }
-
-struct Ctx<'a> {
-    scene: &'a Scene,
-    rt: &'a CommittedScene,
-    maps: Option<&'a RenderMaps>,
-    cache: Option<&'a IrradianceCache>,
-    lights: LightSampler<'a>,
-    view: View,
-    gather: u32,
-    light_samples: u32,
-    spp: u32,
-    lookup: Lookup,
-    eps: f32,
-    show_emitters: bool,
-}
-
 /// Per-thread scratch and counters.
-struct Scratch {
-    neighbors: Vec<Neighbor>,
-    lookup_ns: u64,
-    hits: u64,
-    misses: u64,
+pub(super) struct Scratch {
+    pub(super) neighbors: Vec<Neighbor>,
+    pub(super) lookup_ns: u64,
+    pub(super) hits: u64,
+    pub(super) misses: u64,
 }
 
 /// A non-delta hit reached through zero or more mirrors.
@@ -74,6 +53,7 @@ struct SurfaceHit<'a> {
     /// Unit direction back along the ray.
     wo: Vec3,
     material: &'a Material,
+    material_index: usize,
     /// Product of the mirror weights on the way.
     throughput: Vec3,
 }
@@ -138,6 +118,7 @@ impl<'a> Ctx<'a> {
                     shading,
                     wo,
                     material,
+                    material_index: h.material as usize,
                     throughput,
                 });
             }
@@ -172,7 +153,10 @@ impl<'a> Ctx<'a> {
     }
 
     /// Radiance leaving a gather hit `y`: the cache's irradiance times
-    /// `albedo / pi` on a diffuse surface, else the full map's estimate.
+    /// `albedo / pi` (a glossy surface is read as a diffuse one of its
+    /// directional albedo towards the gather ray: biased there, but without
+    /// the fireflies of a glossy k-nearest estimate), else, on a cache miss
+    /// or without a cache, the full map's estimate.
     fn cached_radiance(
         &self,
         maps: &RenderMaps,
@@ -180,14 +164,18 @@ impl<'a> Ctx<'a> {
         rng: &mut Rng,
         sc: &mut Scratch,
     ) -> Vec3 {
-        if let (Some(cache), Brdf::Lambert(l)) = (self.cache, &y.material.brdf) {
+        if let Some(cache) = self.cache {
             let t = Instant::now();
             let [u0, u1] = rng.next_2d();
             let e = cache.irradiance(y.position, y.normal, [u0, u1, rng.next_f32()]);
             sc.lookup_ns += t.elapsed().as_nanos() as u64;
             if let Some(e) = e {
                 sc.hits += 1;
-                return l.albedo * FRAC_1_PI * e;
+                let albedo = match &y.material.brdf {
+                    Brdf::Lambert(l) => l.albedo,
+                    _ => self.albedo[y.material_index].at(y.wo.dot(y.shading)),
+                };
+                return albedo * FRAC_1_PI * e;
             }
             sc.misses += 1;
         }
@@ -246,7 +234,7 @@ impl<'a> Ctx<'a> {
         sum / l as f32
     }
 
-    fn radiance(
+    pub(super) fn radiance(
         &self,
         ray: Ray,
         px: (&PixelSampler, u32),
@@ -276,128 +264,4 @@ impl<'a> Ctx<'a> {
         };
         l + s.throughput * local
     }
-}
-
-/// Renders `scene` (whose Embree geometry is `rt`) with `maps`, on the current
-/// rayon pool. `progress(rows_done, rows_total)` is called from worker threads.
-///
-/// # Errors
-/// [`Error::InvalidParameter`] for bad settings or a view that needs a photon
-/// map when `maps` is `None`.
-pub fn render(
-    scene: &Scene,
-    rt: &CommittedScene,
-    maps: Option<&RenderMaps>,
-    cfg: &RenderConfig,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<Image> {
-    render_with(scene, rt, maps, None, cfg, progress).map(|(image, _)| image)
-}
-
-/// [`render`] returning the render's [`RenderStats`]. The gather reads its
-/// hits from `cache` when given; else, when the settings ask for a cache
-/// (`cache_stride > 0`, a gather, the full view), one is built from
-/// `maps.full` first (its time is in [`RenderStats::cache_build_s`]).
-///
-/// # Errors
-/// As [`render`].
-pub fn render_with(
-    scene: &Scene,
-    rt: &CommittedScene,
-    maps: Option<&RenderMaps>,
-    cache: Option<&IrradianceCache>,
-    cfg: &RenderConfig,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<(Image, RenderStats)> {
-    cfg.validate()?;
-    if maps.is_none() && cfg.view != View::DirectOnly {
-        return Err(Error::param(
-            "photon map",
-            "this view reads the photon map; pass one or use the direct-only view",
-        ));
-    }
-    let mut image = Image::new(cfg.width, cfg.height)?;
-    let max_radius = cfg.max_radius.unwrap_or_else(|| default_max_radius(scene));
-    let lookup = Lookup {
-        k: cfg.k,
-        max_radius,
-    };
-    let built = match (cache, maps) {
-        (None, Some(m))
-            if cfg.cache_stride > 0 && cfg.final_gather > 0 && cfg.view == View::Full =>
-        {
-            let (lo, hi) = scene.bounds();
-            let c = CacheConfig {
-                stride: cfg.cache_stride,
-                lookup,
-            };
-            Some(IrradianceCache::build(&m.full, rt, (hi - lo).length(), &c)?)
-        }
-        _ => None,
-    };
-    let cache = cache.or(built.as_ref());
-    let camera = cfg.camera_for(scene);
-    let rays = CameraRays::new(&camera, cfg.width, cfg.height);
-    let ctx = Ctx {
-        scene,
-        rt,
-        maps,
-        cache,
-        lights: LightSampler::new(scene),
-        view: cfg.view,
-        gather: cfg.final_gather,
-        light_samples: cfg.light_samples,
-        spp: cfg.spp,
-        lookup,
-        eps: ray_epsilon(scene),
-        show_emitters: cfg.show_emitters,
-    };
-    let width = cfg.width as usize;
-    let rows = cfg.height as u64;
-    let done = AtomicU64::new(0);
-    let (lookup_ns, hits, misses) = (AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0));
-    let inv_spp = 1.0 / cfg.spp as f32;
-    image
-        .pixels
-        .par_chunks_mut(width)
-        .enumerate()
-        .for_each(|(y, row)| {
-            let mut sc = Scratch {
-                neighbors: Vec::with_capacity(cfg.k),
-                lookup_ns: 0,
-                hits: 0,
-                misses: 0,
-            };
-            for (x, px) in row.iter_mut().enumerate() {
-                let pixel = (y * width + x) as u64;
-                let key = hash2(cfg.seed, pixel);
-                let sampler = PixelSampler::new(key);
-                let mut sum = Vec3::ZERO;
-                for s in 0..cfg.spp {
-                    let mut rng = Rng::new(hash2(key, s as u64));
-                    let [jx, jy] = sampler.get_2d(dim::PIXEL, s, cfg.spp);
-                    let ray = rays.ray(x as f32 + jx, y as f32 + jy);
-                    let l = ctx.radiance(ray, (&sampler, s), &mut rng, &mut sc);
-                    // A NaN or infinite sample (degenerate geometry) is dropped, not spread.
-                    if l.is_finite() {
-                        sum += l;
-                    }
-                }
-                *px = sum * inv_spp;
-            }
-            lookup_ns.fetch_add(sc.lookup_ns, Ordering::Relaxed);
-            hits.fetch_add(sc.hits, Ordering::Relaxed);
-            misses.fetch_add(sc.misses, Ordering::Relaxed);
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, rows);
-        });
-    let stats = RenderStats {
-        samples: cfg.width as u64 * cfg.height as u64 * cfg.spp as u64,
-        lookup_s: lookup_ns.into_inner() as f64 * 1e-9,
-        cache_hits: hits.into_inner(),
-        cache_misses: misses.into_inner(),
-        cache_build_s: built.as_ref().map_or(0.0, |c| c.build_s),
-        cache_entries: cache.map_or(0, |c| c.len()),
-        cache_bytes_per_entry: cache.map_or(0, |c| c.bytes_per_entry()),
-    };
-    Ok((image, stats))
 }

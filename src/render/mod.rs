@@ -79,6 +79,7 @@ pub mod path;
 mod path_light;
 mod path_render;
 mod quadrature;
+mod run;
 pub mod sampler;
 pub mod study;
 
@@ -87,11 +88,11 @@ pub use camera::CameraRays;
 pub use direct::LightSampler;
 pub use estimate::{irradiance_default, irradiance_estimate, radiance_estimate, Estimate, Lookup};
 pub use image::{check_output_path, Image, ToneMap, MAX_DIMENSION};
-pub use integrator::{render, render_with, RenderStats};
 pub use metrics::{mean_bias, relative_rmse, relative_rmse_masked, rmse};
 pub use path::{Integrator, PathPart, PathTracer};
 pub use path_render::{indirect_irradiance, light_pixels, render_path, PathHalves};
 pub use quadrature::{floor_points, quadrature_irradiance};
+pub use run::{render, render_with, RenderStats};
 
 use crate::error::{Error, Result};
 use crate::scene::{Camera, Scene};
