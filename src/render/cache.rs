@@ -138,7 +138,7 @@ fn bucket(n: Vec3) -> u64 {
 /// Ward's RGBE: 8-bit mantissas sharing the largest channel's exponent.
 fn to_rgbe(c: Vec3) -> u32 {
     let m = c.max_element();
-    if !(m > 1e-32) || !m.is_finite() {
+    if m.is_nan() || m <= 1e-32 || !m.is_finite() {
         return 0;
     }
     let e = m.log2().floor() as i32 + 1;
@@ -216,7 +216,7 @@ impl IrradianceCache {
         // Cell faces off the round coordinates that walls sit on (a floor at
         // y = 0 on a face would split its samples and lookups by the sign of
         // rounding errors): every level's faces are >= 0.14 h from 0.
-        let origin = Vec3::new(0.3183, 0.2718, 0.1414) * cell;
+        let origin = Vec3::new(0.3127, 0.2718, 0.1414) * cell;
         let mut cache = IrradianceCache {
             slots: Vec::new(),
             origin,

@@ -130,7 +130,7 @@ mod tests {
     fn a_pixel_of_64_points_is_a_0_6_2_net() {
         let s = PixelSampler::new(42);
         for (nx, ny) in [(8usize, 8usize), (64, 1), (1, 64), (16, 4), (2, 32)] {
-            let mut seen = vec![false; 64];
+            let mut seen = [false; 64];
             for i in 0..64 {
                 let [x, y] = s.get_2d(dim::LIGHT, i, 64);
                 let c = (y * ny as f32) as usize * nx + (x * nx as f32) as usize;
