@@ -3,8 +3,13 @@
 and `bench tradeoff`. Run from the repository root: python3 tools/make_gallery.py
 
 An open-fronted room (6 x 3 x 6 m, floor at y = 0, camera outside looking +z):
-- a perfect mirror on the back wall (metallic 1, roughness 0 -> Mirror);
-- a glossy gold sphere (metallic 1, roughness 0.3 -> Cook-Torrance, m = 0.09);
+- a perfect mirror standing before the back wall, turned 31 degrees about the
+  vertical and tipped 5 degrees down so that the camera sees the gold sphere,
+  the lit floor and the sand wall in it (facing the camera it showed the open
+  front: black); the sharp panel's light it reflects lands on the floor as a
+  caustic only photons find (metallic 1, roughness 0 -> Mirror);
+- a glossy gold sphere (metallic 1, roughness 0.3 -> Cook-Torrance, m = 0.09)
+  with per-vertex NORMALs (smooth shading);
 - a glossy red plastic block (metallic 0, roughness 0.25 -> Cook-Torrance with a
   diffuse base), see brdf::from_gltf_pbr for the mapping;
 - four lights of different power, size and exponent: a large diffuse ceiling
@@ -52,6 +57,23 @@ def box(x0, x1, y0, y1, z0, z1, angle):
     return v, tris
 
 
+def mirror_panel(centre, half_w, half_h, normal):
+    """A rectangle about `centre` facing the unit `normal` (horizontal sides)."""
+    nx, ny, nz = normal
+    right = (-nz, 0.0, nx)
+    k = math.sqrt(right[0] ** 2 + right[2] ** 2)
+    right = (right[0] / k, 0.0, right[2] / k)
+    up = (ny * right[2] - nz * right[1], nz * right[0] - nx * right[2], nx * right[1] - ny * right[0])
+    def p(a, b):
+        return tuple(centre[i] + a * half_w * right[i] + b * half_h * up[i] for i in range(3))
+    return [p(-1, -1), p(1, -1), p(1, 1), p(-1, 1)], [(0, 1, 2), (0, 2, 3)]
+
+
+def unit(v):
+    n = math.sqrt(sum(x * x for x in v))
+    return tuple(x / n for x in v)
+
+
 def sphere(c, r, nu=32, nv=16):
     v, t = [], []
     for j in range(nv + 1):
@@ -90,7 +112,8 @@ def main():
         ("back_wall", "white", *quad((-W, 0, D), (-W, H, D), (W, H, D), (W, 0, D))),
         ("left_wall", "sand", *quad((W, 0, -D), (W, 0, D), (W, H, D), (W, H, -D))),
         ("right_wall", "blue", *quad((-W, 0, -D), (-W, H, -D), (-W, H, D), (-W, 0, D))),
-        ("mirror", "mirror", *quad((-0.6, 0.4, D - 0.02), (-0.6, 2.3, D - 0.02), (-2.4, 2.3, D - 0.02), (-2.4, 0.4, D - 0.02))),
+        # Normal from the mirror's centre: halfway between the camera and the sphere.
+        ("mirror", "mirror", *mirror_panel((-1.5, 1.35, D - 0.6), 0.9, 0.95, unit((0.506, -0.095, -0.848)))),
         # Panels a centimetre under the ceiling, winding facing down.
         ("panel_diffuse", "panel_diffuse", *quad((-0.6, H - 0.01, -0.6), (0.6, H - 0.01, -0.6), (0.6, H - 0.01, 0.6), (-0.6, H - 0.01, 0.6))),
         ("panel_sharp", "panel_sharp", *quad((-1.85, H - 0.01, -1.35), (-1.55, H - 0.01, -1.35), (-1.55, H - 0.01, -1.05), (-1.85, H - 0.01, -1.05))),
@@ -100,6 +123,16 @@ def main():
     blob = bytearray()
     accessors, views, gl_meshes, nodes = [], [], [], []
     for name, mat, pos, idx in meshes:
+        attributes = {}
+        if name == "gold_sphere":
+            centre = (1.2, 0.7, 0.9)
+            normals = [unit(tuple(p[i] - centre[i] for i in range(3))) for p in pos]
+            off = len(blob)
+            for n in normals:
+                blob += struct.pack("<3f", *n)
+            views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(normals), "target": 34962})
+            accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": len(normals), "type": "VEC3"})
+            attributes["NORMAL"] = len(accessors) - 1
         off = len(blob)
         for v in pos:
             blob += struct.pack("<3f", *v)
@@ -107,12 +140,13 @@ def main():
         lo = [min(v[i] for v in pos) for i in range(3)]
         hi = [max(v[i] for v in pos) for i in range(3)]
         accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": len(pos), "type": "VEC3", "min": lo, "max": hi})
+        attributes["POSITION"] = len(accessors) - 1
         off = len(blob)
         for t in idx:
             blob += struct.pack("<3I", *t)
         views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(idx), "target": 34963})
         accessors.append({"bufferView": len(views) - 1, "componentType": 5125, "count": 3 * len(idx), "type": "SCALAR"})
-        gl_meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1, "material": MAT[mat]}]})
+        gl_meshes.append({"name": name, "primitives": [{"attributes": attributes, "indices": len(accessors) - 1, "material": MAT[mat]}]})
         nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
     spot_pos = (2.2, 2.8, -1.8)
     target = (1.2, 0.7, 0.9)

@@ -6,8 +6,8 @@ use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Mode, Tracer};
 use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
-    check_output_path, render, render_path, Integrator, PathHalves, PathPart, RenderConfig,
-    RenderMaps, ToneMap, View, DEFAULT_K,
+    cache::DEFAULT_STRIDE, check_output_path, render_path, render_with, Integrator, PathHalves,
+    PathPart, RenderConfig, RenderMaps, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
 };
 use adaptive_pm::scene::PreparedScene;
 use serde_json::json;
@@ -38,9 +38,15 @@ pub struct RenderArgs {
     /// Image height in pixels.
     #[arg(long, default_value_t = 256)]
     pub height: u32,
-    /// Final-gather rays per hit (0: read the indirect map at the first hit).
-    #[arg(long, default_value_t = 0)]
+    /// Final-gather rays per camera sample (0: read the indirect map at the first hit).
+    #[arg(long, default_value_t = DEFAULT_GATHER)]
     pub final_gather: u32,
+    /// Light samples (shadow rays) per camera sample.
+    #[arg(long, default_value_t = 1)]
+    pub light_samples: u32,
+    /// Photons per irradiance-cache entry (0: the gather reads the k nearest photons).
+    #[arg(long, default_value_t = DEFAULT_STRIDE)]
+    pub cache_stride: u32,
     /// Photons per radiance estimate.
     #[arg(long, default_value_t = DEFAULT_K)]
     pub k: usize,
@@ -89,6 +95,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let mut cfg = RenderConfig::new(args.width, args.height);
     cfg.spp = args.spp;
     cfg.final_gather = args.final_gather;
+    cfg.light_samples = args.light_samples;
+    cfg.cache_stride = args.cache_stride;
     cfg.k = args.k;
     cfg.view = view;
     cfg.seed = args.budget.seed;
@@ -108,7 +116,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     if args.integrator == Integrator::Path {
         return run_path(&args, &scene, &rt, &cfg, &pool);
     }
-    let (maps, trace_s, photons) = if view == View::DirectOnly {
+    let (maps, trace_s, photons): (Option<RenderMaps>, f64, usize) = if view == View::DirectOnly {
         (None, 0.0, 0)
     } else if let Some(path) = &args.map {
         let t = Instant::now();
@@ -131,8 +139,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     bar.set_length(args.height as u64);
     bar.set_message("render");
     let t = Instant::now();
-    let image = pool.install(|| {
-        render(&scene, &rt, maps.as_ref(), &cfg, &|done, _| {
+    let (image, stats) = pool.install(|| {
+        render_with(&scene, &rt, maps.as_ref(), None, &cfg, &|done, _| {
             bar.set_position(done)
         })
     })?;
@@ -153,6 +161,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         )?;
     }
     let mean = image.mean();
+    let map_build_s = maps.as_ref().map_or(0.0, |m| m.build_total_s());
+    let samples_per_s = stats.samples as f64 / render_s.max(1e-9);
     if args.json {
         println!(
             "{}",
@@ -164,10 +174,19 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 "height": args.height,
                 "spp": args.spp,
                 "final_gather": args.final_gather,
+                "light_samples": args.light_samples,
+                "cache_stride": args.cache_stride,
                 "k": args.k,
                 "photons": photons,
                 "trace_s": trace_s,
+                "map_build_s": map_build_s,
                 "render_s": render_s,
+                "samples_per_s": samples_per_s,
+                "lookup_s": stats.lookup_s,
+                "cache_build_s": stats.cache_build_s,
+                "cache_entries": stats.cache_entries,
+                "cache_bytes_per_entry": stats.cache_bytes_per_entry,
+                "cache_misses": stats.cache_misses,
                 "mean_rgb": [mean.x, mean.y, mean.z],
                 "out": args.out,
             })
@@ -185,6 +204,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             args.spp,
             args.final_gather
         );
+        let (cache_n, cache_s) = (stats.cache_entries, stats.cache_build_s);
+        println!("{samples_per_s:.0} samples/s, lookups {:.3} s (thread sum), cache {cache_n} cells built in {cache_s:.3} s", stats.lookup_s);
         println!("mean RGB {:.4} {:.4} {:.4}", mean.x, mean.y, mean.z);
         println!("wrote {}", args.out.display());
         if let Some(p) = &args.png {

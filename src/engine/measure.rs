@@ -19,60 +19,80 @@ pub const DENSITY_POINTS: usize = 4096;
 /// Seed of the evaluation points (fixed, independent of the run's seed).
 pub const DENSITY_POINTS_SEED: u64 = 0xDE45_1717;
 
-/// Both maps of a run, with their build times.
+/// The one map set of a run (the density measurements and the renderer read
+/// it), with build times.
 #[derive(Debug)]
 pub struct Maps {
-    /// All stored photons.
+    /// All stored photons (the renderer's gather reads it at secondary hits).
     pub full: PhotonMap,
-    /// Photons stored at their first hit only.
+    /// Photons stored at their first hit only (the paper's primary map).
     pub primary: PhotonMap,
+    /// Photons stored at depth >= 1 (the renderer's indirect light at a first hit).
+    pub indirect: PhotonMap,
     /// Seconds to build `full`.
     pub build_s: f64,
     /// Seconds to build `primary`.
     pub build_primary_s: f64,
+    /// Seconds to build `indirect`.
+    pub build_indirect_s: f64,
 }
 
 impl Maps {
-    /// Builds both kd-trees.
+    /// Builds the three kd-trees.
     pub fn build(records: &[PhotonRecord]) -> Self {
-        let t = Instant::now();
-        let full = PhotonMap::build(records);
-        let build_s = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let primary_records: Vec<PhotonRecord> =
-            records.iter().filter(|r| r.depth == 0).copied().collect();
-        let primary = PhotonMap::build(&primary_records);
-        let build_primary_s = t.elapsed().as_secs_f64();
+        let timed = |keep: fn(&PhotonRecord) -> bool| {
+            let t = Instant::now();
+            let map = PhotonMap::build_filtered(records, keep);
+            (map, t.elapsed().as_secs_f64())
+        };
+        let (full, build_s) = timed(|_| true);
+        let (primary, build_primary_s) = timed(|r| r.depth == 0);
+        let (indirect, build_indirect_s) = timed(|r| r.depth >= 1);
         Maps {
             full,
             primary,
+            indirect,
             build_s,
             build_primary_s,
+            build_indirect_s,
         }
+    }
+
+    /// Seconds to build all three maps.
+    pub fn build_total_s(&self) -> f64 {
+        self.build_s + self.build_primary_s + self.build_indirect_s
     }
 }
 
 impl Maps {
-    /// Both kd-trees from a trace's compact photons, without decoding them:
-    /// the full map is built in place over `photons`, the primary map over a
-    /// copy of the depth-0 photons.
+    /// The three kd-trees from a trace's compact photons, without decoding
+    /// them: the full map is built in place over `photons`, the primary and
+    /// indirect maps over copies of their photons.
     pub fn from_photons(photons: Vec<CompactPhoton>, frame: Quantizer) -> Self {
-        let t = Instant::now();
-        let primary: Vec<CompactPhoton> = photons
-            .par_iter()
-            .with_min_len(4096)
-            .filter(|p| p.depth() == 0)
-            .copied()
-            .collect();
-        let primary = PhotonMap::from_compact(primary, frame);
-        let build_primary_s = t.elapsed().as_secs_f64();
+        let subset = |keep: fn(u8) -> bool| {
+            let t = Instant::now();
+            let part: Vec<CompactPhoton> = photons
+                .par_iter()
+                .with_min_len(4096)
+                .filter(|p| keep(p.depth()))
+                .copied()
+                .collect();
+            (
+                PhotonMap::from_compact(part, frame),
+                t.elapsed().as_secs_f64(),
+            )
+        };
+        let (primary, build_primary_s) = subset(|d| d == 0);
+        let (indirect, build_indirect_s) = subset(|d| d >= 1);
         let t = Instant::now();
         let full = PhotonMap::from_compact(photons, frame);
         Maps {
             full,
             primary,
+            indirect,
             build_s: t.elapsed().as_secs_f64(),
             build_primary_s,
+            build_indirect_s,
         }
     }
 }

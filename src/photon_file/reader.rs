@@ -181,19 +181,11 @@ pub fn read_render_maps(
         ));
     }
     let (_, full) = read_map(path, |_| true)?;
-    let pick = |keep: fn(u8) -> bool| {
-        let photons: Vec<CompactPhoton> = full
-            .photons
-            .iter()
-            .map(|p| CompactPhoton::from_bits(p.bits().0, p.bits().1))
-            .filter(|p| keep(p.depth()))
-            .collect();
-        PhotonMap::from_compact(photons, header.frame())
-    };
-    let maps = crate::render::RenderMaps {
-        indirect: pick(|d| d >= 1),
-        primary: pick(|d| d == 0),
-        full,
-    };
+    let (photons, frame) = full.into_compact();
+    let photons = photons
+        .into_iter()
+        .map(|p| CompactPhoton::from_bits(p.bits().0, p.bits().1))
+        .collect();
+    let maps = crate::render::RenderMaps::from_photons(photons, frame);
     Ok((header, maps))
 }

@@ -1,29 +1,45 @@
-//! The per-pixel estimator (see the module docs of [`super`]): rows of pixels
-//! in parallel, each sample with its own counter-based random stream.
+//! The per-sample estimator (see the module docs of [`super`]): each sample
+//! with its own counter-based random stream and the pixel's stratified
+//! points ([`super::sampler`]). The image loop is in [`super::run`].
 
-use super::camera::CameraRays;
-use super::direct::direct_radiance;
+use super::cache::IrradianceCache;
+use super::direct::LightSampler;
 use super::estimate::{radiance_estimate, Lookup};
-use super::{default_max_radius, ray_epsilon, Image, RenderConfig, RenderMaps, View, MAX_SPECULAR};
+use super::sampler::{dim, PixelSampler};
+use super::{RenderMaps, View, MAX_SPECULAR};
+use crate::brdf::Brdf;
 use crate::embree::{CommittedScene, Hit, Ray};
-use crate::error::{Error, Result};
+use crate::engine::albedo::AlbedoTable;
 use crate::photon_map::{Neighbor, PhotonMap};
-use crate::rng::{hash2, Rng};
+use crate::rng::Rng;
 use crate::sampling::Frame;
 use crate::scene::{Material, Scene};
 use glam::Vec3;
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::f32::consts::FRAC_1_PI;
+use std::time::Instant;
 
-struct Ctx<'a> {
-    scene: &'a Scene,
-    rt: &'a CommittedScene,
-    maps: Option<&'a RenderMaps>,
-    view: View,
-    gather: u32,
-    lookup: Lookup,
-    eps: f32,
-    show_emitters: bool,
+pub(super) struct Ctx<'a> {
+    pub(super) scene: &'a Scene,
+    pub(super) rt: &'a CommittedScene,
+    pub(super) maps: Option<&'a RenderMaps>,
+    pub(super) cache: Option<&'a IrradianceCache>,
+    pub(super) lights: LightSampler<'a>,
+    /// Directional albedo of each material (glossy gather hits).
+    pub(super) albedo: Vec<AlbedoTable>,
+    pub(super) view: View,
+    pub(super) gather: u32,
+    pub(super) light_samples: u32,
+    pub(super) spp: u32,
+    pub(super) lookup: Lookup,
+    pub(super) eps: f32,
+    pub(super) show_emitters: bool,
+}
+/// Per-thread scratch and counters.
+pub(super) struct Scratch {
+    pub(super) neighbors: Vec<Neighbor>,
+    pub(super) lookup_ns: u64,
+    pub(super) hits: u64,
+    pub(super) misses: u64,
 }
 
 /// A non-delta hit reached through zero or more mirrors.
@@ -31,9 +47,13 @@ struct SurfaceHit<'a> {
     position: Vec3,
     /// Geometric normal flipped to the side the ray came from.
     normal: Vec3,
+    /// Shading normal (interpolated vertex normals when the mesh has them),
+    /// on the same side as `normal`.
+    shading: Vec3,
     /// Unit direction back along the ray.
     wo: Vec3,
     material: &'a Material,
+    material_index: usize,
     /// Product of the mirror weights on the way.
     throughput: Vec3,
 }
@@ -50,6 +70,23 @@ impl<'a> Ctx<'a> {
                 }
             }
             None => Vec3::ZERO,
+        }
+    }
+
+    /// The shading normal at `h`, on the side of `normal` (the flipped
+    /// geometric normal), and facing `wo` (else the geometric one is used).
+    fn shading_normal(&self, h: &Hit, normal: Vec3, wo: Vec3) -> Vec3 {
+        let Some(mesh) = self.scene.meshes.get(h.geom_id as usize) else {
+            return normal;
+        };
+        let Some(ns) = mesh.shading_normal(h.prim_id as usize, h.u, h.v) else {
+            return normal;
+        };
+        let ns = if ns.dot(normal) < 0.0 { -ns } else { ns };
+        if ns.dot(wo) > 0.0 {
+            ns
+        } else {
+            normal
         }
     }
 
@@ -73,175 +110,158 @@ impl<'a> Ctx<'a> {
             if bounce >= first_emission {
                 *emitted += throughput * Self::emitted(material, &h, wo);
             }
+            let shading = self.shading_normal(&h, normal, wo);
             if !material.brdf.is_delta() {
                 return Some(SurfaceHit {
                     position,
                     normal,
+                    shading,
                     wo,
                     material,
+                    material_index: h.material as usize,
                     throughput,
                 });
             }
-            let frame = Frame::from_normal(normal);
+            let frame = Frame::from_normal(shading);
             let bs = material
                 .brdf
                 .sample(frame.local_from_world(wo), rng.next_2d())?;
             throughput *= bs.weight;
-            if throughput.max_element() <= 0.0 {
+            let out = frame.world_from_local(bs.wo);
+            if throughput.max_element() <= 0.0 || out.dot(normal) <= 0.0 {
                 return None;
             }
-            ray = Ray::new(position + normal * self.eps, frame.world_from_local(bs.wo));
+            ray = Ray::new(position + normal * self.eps, out);
         }
         None
     }
 
-    fn estimate(&self, map: &PhotonMap, s: &SurfaceHit, scratch: &mut Vec<Neighbor>) -> Vec3 {
-        radiance_estimate(
+    fn estimate(&self, map: &PhotonMap, s: &SurfaceHit, sc: &mut Scratch) -> Vec3 {
+        let t = Instant::now();
+        let v = radiance_estimate(
             map,
             &s.material.brdf,
             s.position,
             s.normal,
             s.wo,
             self.lookup,
-            scratch,
+            &mut sc.neighbors,
         )
-        .value
+        .value;
+        sc.lookup_ns += t.elapsed().as_nanos() as u64;
+        v
     }
 
-    /// Final gather from `s`: BRDF-sampled rays, the full map at their hits.
+    /// Radiance leaving a gather hit `y`: the cache's irradiance times
+    /// `albedo / pi` (a glossy surface is read as a diffuse one of its
+    /// directional albedo towards the gather ray: biased there, but without
+    /// the fireflies of a glossy k-nearest estimate), else, on a cache miss
+    /// or without a cache, the full map's estimate.
+    fn cached_radiance(
+        &self,
+        maps: &RenderMaps,
+        y: &SurfaceHit,
+        rng: &mut Rng,
+        sc: &mut Scratch,
+    ) -> Vec3 {
+        if let Some(cache) = self.cache {
+            let t = Instant::now();
+            let [u0, u1] = rng.next_2d();
+            let e = cache.irradiance(y.position, y.normal, [u0, u1, rng.next_f32()]);
+            sc.lookup_ns += t.elapsed().as_nanos() as u64;
+            if let Some(e) = e {
+                sc.hits += 1;
+                let albedo = match &y.material.brdf {
+                    Brdf::Lambert(l) => l.albedo,
+                    _ => self.albedo[y.material_index].at(y.wo.dot(y.shading)),
+                };
+                return albedo * FRAC_1_PI * e;
+            }
+            sc.misses += 1;
+        }
+        self.estimate(&maps.full, y, sc)
+    }
+
+    /// Final gather from `s`: BRDF-sampled rays (stratified over the pixel's
+    /// samples), the cache (or the full map) at their hits.
     fn gather(
         &self,
         maps: &RenderMaps,
         s: &SurfaceHit,
+        (px, sample): (&PixelSampler, u32),
         rng: &mut Rng,
-        scratch: &mut Vec<Neighbor>,
+        sc: &mut Scratch,
     ) -> Vec3 {
-        let frame = Frame::from_normal(s.normal);
+        let frame = Frame::from_normal(s.shading);
         let wo_l = frame.local_from_world(s.wo);
         let mut sum = Vec3::ZERO;
-        for _ in 0..self.gather {
-            let Some(bs) = s.material.brdf.sample(wo_l, rng.next_2d()) else {
+        let n = self.spp * self.gather;
+        for j in 0..self.gather {
+            let u = px.get_2d(dim::GATHER, sample * self.gather + j, n);
+            let Some(bs) = s.material.brdf.sample(wo_l, u) else {
                 continue;
             };
-            let ray = Ray::new(
-                s.position + s.normal * self.eps,
-                frame.world_from_local(bs.wo),
-            );
+            let dir = frame.world_from_local(bs.wo);
+            if dir.dot(s.normal) <= 0.0 {
+                continue;
+            }
+            let ray = Ray::new(s.position + s.normal * self.eps, dir);
             // Emission straight from a light was counted by light sampling;
             // after a mirror it is a caustic only the gather finds.
             let mut emitted = Vec3::ZERO;
             if let Some(y) = self.trace(ray, 1, rng, &mut emitted) {
-                sum += bs.weight * y.throughput * self.estimate(&maps.full, &y, scratch);
+                sum += bs.weight * y.throughput * self.cached_radiance(maps, &y, rng, sc);
             }
             sum += bs.weight * emitted;
         }
         sum / self.gather as f32
     }
 
-    fn radiance(&self, ray: Ray, rng: &mut Rng, scratch: &mut Vec<Neighbor>) -> Vec3 {
+    /// Direct light at `s`: `light_samples` stratified light samples.
+    fn direct(&self, s: &SurfaceHit, (px, sample): (&PixelSampler, u32)) -> Vec3 {
+        let l = self.light_samples;
+        let mut sum = Vec3::ZERO;
+        for j in 0..l {
+            let u = px.get_2d(dim::LIGHT, sample * l + j, self.spp * l);
+            sum += self.lights.sample(
+                self.rt,
+                &s.material.brdf,
+                [s.position, s.normal, s.shading, s.wo],
+                self.eps,
+                u,
+            );
+        }
+        sum / l as f32
+    }
+
+    pub(super) fn radiance(
+        &self,
+        ray: Ray,
+        px: (&PixelSampler, u32),
+        rng: &mut Rng,
+        sc: &mut Scratch,
+    ) -> Vec3 {
         let mut l = Vec3::ZERO;
         let first = if self.show_emitters { 0 } else { u32::MAX };
         let Some(s) = self.trace(ray, first, rng, &mut l) else {
             return l;
         };
-        let direct = |rng: &mut Rng| {
-            direct_radiance(
-                self.scene,
-                self.rt,
-                &s.material.brdf,
-                [s.position, s.normal, s.wo],
-                self.eps,
-                rng,
-            )
-        };
         let local = match (self.view, self.maps) {
-            (View::DirectOnly, _) => direct(rng),
+            (View::DirectOnly, _) => self.direct(&s, px),
             (View::Map { primary_only }, Some(m)) => {
                 let map = if primary_only { &m.primary } else { &m.full };
-                self.estimate(map, &s, scratch)
+                self.estimate(map, &s, sc)
             }
             (View::Full, Some(m)) => {
                 let indirect = if self.gather > 0 {
-                    self.gather(m, &s, rng, scratch)
+                    self.gather(m, &s, px, rng, sc)
                 } else {
-                    self.estimate(&m.indirect, &s, scratch)
+                    self.estimate(&m.indirect, &s, sc)
                 };
-                direct(rng) + indirect
+                self.direct(&s, px) + indirect
             }
             (_, None) => Vec3::ZERO,
         };
         l + s.throughput * local
     }
-}
-
-/// Renders `scene` (whose Embree geometry is `rt`) with `maps`, on the current
-/// rayon pool. `progress(rows_done, rows_total)` is called from worker threads.
-///
-/// # Errors
-/// [`Error::InvalidParameter`] for bad settings or a view that needs a photon
-/// map when `maps` is `None`; [`Error::InvalidScene`] when neither `cfg` nor
-/// the scene has a camera.
-pub fn render(
-    scene: &Scene,
-    rt: &CommittedScene,
-    maps: Option<&RenderMaps>,
-    cfg: &RenderConfig,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<Image> {
-    cfg.validate()?;
-    if maps.is_none() && cfg.view != View::DirectOnly {
-        return Err(Error::param(
-            "photon map",
-            "this view reads the photon map; pass one or use the direct-only view",
-        ));
-    }
-    // A tile (`cfg.rows`) is an image of its rows only; pixels keep their
-    // whole-image index, so their samples are the whole image's.
-    let (y0, y1) = cfg.rows.unwrap_or((0, cfg.height));
-    let mut image = Image::new(cfg.width, y1 - y0)?;
-    let camera = cfg.camera_for(scene)?;
-    let rays = CameraRays::new(&camera, cfg.width, cfg.height);
-    let ctx = Ctx {
-        scene,
-        rt,
-        maps,
-        view: cfg.view,
-        gather: cfg.final_gather,
-        lookup: Lookup {
-            k: cfg.k,
-            max_radius: cfg.max_radius.unwrap_or_else(|| default_max_radius(scene)),
-        },
-        eps: ray_epsilon(scene),
-        show_emitters: cfg.show_emitters,
-    };
-    let width = cfg.width as usize;
-    let rows = (y1 - y0) as u64;
-    let done = AtomicU64::new(0);
-    let inv_spp = 1.0 / cfg.spp as f32;
-    image
-        .pixels
-        .par_chunks_mut(width)
-        .enumerate()
-        .for_each(|(y, row)| {
-            let y = y + y0 as usize;
-            let mut scratch = Vec::with_capacity(cfg.k);
-            for (x, px) in row.iter_mut().enumerate() {
-                let pixel = (y * width + x) as u64;
-                let key = hash2(cfg.seed, pixel);
-                let mut sum = Vec3::ZERO;
-                for s in 0..cfg.spp {
-                    let mut rng = Rng::new(hash2(key, s as u64));
-                    let [jx, jy] = rng.next_2d();
-                    let ray = rays.ray(x as f32 + jx, y as f32 + jy);
-                    let l = ctx.radiance(ray, &mut rng, &mut scratch);
-                    // A NaN or infinite sample (degenerate geometry) is dropped, not spread.
-                    if l.is_finite() {
-                        sum += l;
-                    }
-                }
-                *px = sum * inv_spp;
-            }
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, rows);
-        });
-    Ok(image)
 }

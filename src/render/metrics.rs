@@ -48,3 +48,59 @@ pub fn relative_rmse(a: &Image, reference: &Image) -> Result<f64> {
     let m = reference.mean().as_dvec3().element_sum() / 3.0;
     Ok(if m > 0.0 { e / m } else { 0.0 })
 }
+
+/// [`relative_rmse`] over the pixels where `keep` is true (the others, for
+/// instance the light's own pixels, are left out of both the error and the
+/// reference's mean).
+///
+/// # Errors
+/// As [`rmse`], and when `keep` has not one entry per pixel.
+pub fn relative_rmse_masked(a: &Image, reference: &Image, keep: &[bool]) -> Result<f64> {
+    check(a, reference)?;
+    if keep.len() != a.pixels.len() {
+        return Err(Error::param(
+            "pixel mask",
+            format!("has {} entries for {} pixels", keep.len(), a.pixels.len()),
+        ));
+    }
+    let (mut se, mut sum, mut n) = (0.0f64, 0.0f64, 0usize);
+    for ((p, q), &k) in a.pixels.iter().zip(&reference.pixels).zip(keep) {
+        if k {
+            se += (*p - *q).as_dvec3().length_squared();
+            sum += q.as_dvec3().element_sum();
+            n += 1;
+        }
+    }
+    let n = (3 * n.max(1)) as f64;
+    let mean = sum / n;
+    Ok(if mean > 0.0 {
+        (se / n).sqrt() / mean
+    } else {
+        0.0
+    })
+}
+
+/// Per-channel relative difference of the means over the kept pixels:
+/// `mean(a) / mean(reference) - 1` (0 where the reference's mean is 0).
+///
+/// # Errors
+/// As [`relative_rmse_masked`].
+pub fn mean_bias(a: &Image, reference: &Image, keep: &[bool]) -> Result<[f64; 3]> {
+    relative_rmse_masked(a, reference, keep)?;
+    let (mut sa, mut sr) = ([0.0f64; 3], [0.0f64; 3]);
+    for ((p, q), &k) in a.pixels.iter().zip(&reference.pixels).zip(keep) {
+        if k {
+            for c in 0..3 {
+                sa[c] += p[c] as f64;
+                sr[c] += q[c] as f64;
+            }
+        }
+    }
+    Ok(std::array::from_fn(|c| {
+        if sr[c] > 0.0 {
+            sa[c] / sr[c] - 1.0
+        } else {
+            0.0
+        }
+    }))
+}

@@ -68,6 +68,7 @@
 //! its time in the k-nearest photon lookup (k = 100..200, tens of
 //! microseconds) next to ~0.1 µs per ray: batching the rays would not show.
 
+pub mod cache;
 mod camera;
 pub mod direct;
 pub mod estimate;
@@ -77,22 +78,28 @@ pub mod metrics;
 pub mod path;
 mod path_light;
 mod path_render;
+mod quadrature;
+mod run;
+pub mod sampler;
+pub mod study;
 
+pub use cache::{CacheConfig, IrradianceCache};
 pub use camera::CameraRays;
-pub use direct::quadrature_irradiance;
-// Probe points of the trade study and the tests (a named mesh's top face): not a library API.
-#[doc(hidden)]
-pub use direct::floor_points;
+pub use direct::LightSampler;
 pub use estimate::{irradiance_default, irradiance_estimate, radiance_estimate, Estimate, Lookup};
 pub use image::{check_output_path, Image, ToneMap, MAX_DIMENSION};
-pub use integrator::render;
-pub use metrics::{relative_rmse, rmse};
+pub use metrics::{mean_bias, relative_rmse, relative_rmse_masked, rmse};
 pub use path::{Integrator, PathPart, PathTracer};
 pub use path_render::{indirect_irradiance, light_pixels, render_path, PathHalves};
+pub use quadrature::{floor_points, quadrature_irradiance};
+pub use run::{render, render_with, RenderStats};
 
 use crate::error::{Error, Result};
-use crate::photon_map::{PhotonMap, PhotonRecord};
 use crate::scene::{Camera, Scene};
+
+/// The photon maps a render reads: the one map set of a run
+/// ([`crate::engine::Maps`]: full, indirect, primary, with build times).
+pub type RenderMaps = crate::engine::Maps;
 
 /// Default number of photons in a radiance estimate.
 pub const DEFAULT_K: usize = 100;
@@ -109,6 +116,13 @@ pub const MAX_SPP: u32 = 1 << 16;
 
 /// Most final-gather rays per hit accepted.
 pub const MAX_GATHER: u32 = 4096;
+
+/// Most light samples per camera sample accepted.
+pub const MAX_LIGHT_SAMPLES: u32 = 1024;
+
+/// Default final-gather rays per camera sample: one, stratified over the
+/// pixel's samples (64 spp gather 64 directions per pixel).
+pub const DEFAULT_GATHER: u32 = 1;
 
 /// What the image shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -133,8 +147,13 @@ pub struct RenderConfig {
     pub height: u32,
     /// Samples per pixel (jittered positions; one light sample each).
     pub spp: u32,
-    /// Final-gather rays per hit (0 = read the indirect map at the first hit).
+    /// Final-gather rays per camera sample (0 = read the indirect map at the first hit).
     pub final_gather: u32,
+    /// Light samples (shadow rays) per camera sample.
+    pub light_samples: u32,
+    /// The irradiance cache the gather reads: one entry per `cache_stride`
+    /// photons; 0 reads the full map's k-nearest estimate instead.
+    pub cache_stride: u32,
     /// Photons per radiance estimate.
     pub k: usize,
     /// Largest search radius (world units); `None` is
@@ -158,13 +177,16 @@ pub struct RenderConfig {
 }
 
 impl RenderConfig {
-    /// A `width x height` full render, 1 sample per pixel, no gather, defaults elsewhere.
+    /// A `width x height` full render, 1 sample per pixel, defaults elsewhere
+    /// (a final gather through the irradiance cache).
     pub fn new(width: u32, height: u32) -> Self {
         RenderConfig {
             width,
             height,
             spp: 1,
-            final_gather: 0,
+            final_gather: DEFAULT_GATHER,
+            light_samples: 1,
+            cache_stride: cache::DEFAULT_STRIDE,
             k: DEFAULT_K,
             max_radius: None,
             view: View::Full,
@@ -191,6 +213,25 @@ impl RenderConfig {
             return Err(Error::param(
                 "final gather",
                 format!("must be at most {MAX_GATHER}, got {}", self.final_gather),
+            ));
+        }
+        if self.light_samples == 0 || self.light_samples > MAX_LIGHT_SAMPLES {
+            return Err(Error::param(
+                "light samples",
+                format!(
+                    "must be in 1..={MAX_LIGHT_SAMPLES} per camera sample, got {}",
+                    self.light_samples
+                ),
+            ));
+        }
+        if self.cache_stride > cache::MAX_STRIDE {
+            return Err(Error::param(
+                "cache stride",
+                format!(
+                    "must be 0 (no cache) or in 1..={} photons per cache entry, got {}",
+                    cache::MAX_STRIDE,
+                    self.cache_stride
+                ),
             ));
         }
         if self.k == 0 || self.k > 10_000 {
@@ -228,28 +269,6 @@ impl RenderConfig {
                 "the scene has no camera: give the render one (RenderConfig::camera)".into(),
             )
         })
-    }
-}
-
-/// The photon maps a render reads, each a balanced kd-tree.
-#[derive(Debug)]
-pub struct RenderMaps {
-    /// Every stored photon (final gather reads it at secondary hits; the map view).
-    pub full: PhotonMap,
-    /// Photons stored at depth >= 1: indirect light at the first hit.
-    pub indirect: PhotonMap,
-    /// Photons stored at depth 0 (the primary map view, the direct-light oracle).
-    pub primary: PhotonMap,
-}
-
-impl RenderMaps {
-    /// Builds the three maps from a run's records.
-    pub fn build(records: &[PhotonRecord]) -> Self {
-        RenderMaps {
-            full: PhotonMap::build(records),
-            indirect: PhotonMap::build_filtered(records, |r| r.depth >= 1),
-            primary: PhotonMap::build_filtered(records, |r| r.depth == 0),
-        }
     }
 }
 

@@ -9,6 +9,8 @@
 //! - The first perspective camera found becomes [`Scene::camera`].
 //! - Materials map to BRDFs by [`crate::brdf::from_gltf_pbr`] (metallic-roughness).
 //! - Textures are ignored: only the constant factors are read.
+//! - `NORMAL` gives smooth shading normals ([`Scene::set_vertex_normals`]).
+//! - `NORMAL` gives smooth shading normals ([`Scene::set_vertex_normals`]).
 
 use super::{Camera, Emission, Light, Material, PointLight, Scene, SpotLight};
 use crate::brdf::{from_gltf_pbr, Brdf, Lambert};
@@ -140,8 +142,17 @@ fn load_node(
                     })
                 }),
             };
+            // NORMAL: shading normals, by the inverse transpose of the node's matrix.
+            let normal_matrix = world.inverse().transpose();
+            let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| {
+                n.map(|v| normal_matrix.transform_vector3(Vec3::from(v)))
+                    .collect()
+            });
             let name = format!("{}#{pi}", mesh.name().unwrap_or("mesh"));
-            scene.add_mesh(name, positions, indices, material)?;
+            let index = scene.add_mesh(name, positions, indices, material)?;
+            if let Some(n) = normals {
+                scene.set_vertex_normals(index, n)?;
+            }
         }
     }
     if let Some(light) = node.light() {

@@ -80,6 +80,9 @@ pub struct Mesh {
     pub indices: Vec<[u32; 3]>,
     /// Index into [`Scene::materials`].
     pub material: usize,
+    /// Per-vertex shading normals (unit, world space), or empty for flat
+    /// shading ([`Scene::set_vertex_normals`]).
+    pub normals: Vec<Vec3>,
 }
 
 impl Mesh {
@@ -91,6 +94,21 @@ impl Mesh {
             self.positions[b as usize],
             self.positions[c as usize],
         ]
+    }
+
+    /// The interpolated shading normal of triangle `i` at barycentrics
+    /// `(u, v)` (of vertices 1 and 2), unit; `None` for a flat mesh or a
+    /// degenerate interpolation.
+    pub fn shading_normal(&self, i: usize, u: f32, v: f32) -> Option<Vec3> {
+        if self.normals.is_empty() {
+            return None;
+        }
+        let [a, b, c] = *self.indices.get(i)?;
+        let n = self.normals.get(a as usize)? * (1.0 - u - v)
+            + self.normals.get(b as usize)? * u
+            + self.normals.get(c as usize)? * v;
+        let n = n.normalize_or_zero();
+        (n != Vec3::ZERO).then_some(n)
     }
 
     /// Total surface area.
@@ -262,6 +280,7 @@ impl Scene {
             positions,
             indices,
             material,
+            normals: Vec::new(),
         };
         let light = match emission {
             Some(e) => Some(checks::area_light(&mesh, self.meshes.len(), e)?),
@@ -274,6 +293,35 @@ impl Scene {
             self.lights.push(Light::Area(light));
         }
         Ok(self.meshes.len() - 1)
+    }
+
+    /// Gives mesh `mesh` per-vertex shading normals (one per vertex; they are
+    /// normalised, and a zero or non-finite one makes the mesh flat again).
+    ///
+    /// # Errors
+    /// [`Error::InvalidScene`] for an unknown mesh or a count that is not the
+    /// mesh's vertex count.
+    pub fn set_vertex_normals(&mut self, mesh: usize, normals: Vec<Vec3>) -> Result<()> {
+        let Some(m) = self.meshes.get_mut(mesh) else {
+            return Err(Error::InvalidScene(format!(
+                "no mesh {mesh} to give normals"
+            )));
+        };
+        if normals.len() != m.positions.len() {
+            return Err(Error::InvalidScene(format!(
+                "mesh `{}` has {} vertices but {} normals",
+                m.name,
+                m.positions.len(),
+                normals.len()
+            )));
+        }
+        let unit: Vec<Vec3> = normals.iter().map(|n| n.normalize_or_zero()).collect();
+        m.normals = if unit.iter().all(|n| *n != Vec3::ZERO) {
+            unit
+        } else {
+            Vec::new()
+        };
+        Ok(())
     }
 
     /// Adds a punctual light and returns its index in [`Scene::lights`].

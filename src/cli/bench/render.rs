@@ -1,0 +1,91 @@
+//! `adaptive-pm bench render <SCENE>`: the photon render against the path
+//! tracer at equal error, the bias against the photon count, and direct light
+//! alone (see `adaptive_pm::render::study`). Times are from one run on one
+//! thread pool: only their ratios mean anything on a shared machine.
+
+use crate::cli::common::{open_scene, ThreadArgs};
+use adaptive_pm::embree::Device;
+use adaptive_pm::engine::Mode;
+use adaptive_pm::render::study::{run_direct_study, run_study, StudyConfig};
+use adaptive_pm::render::RenderConfig;
+use serde_json::json;
+
+/// Arguments of `bench render`.
+#[derive(clap::Args, Debug)]
+pub struct RenderBenchArgs {
+    /// `cornell`, `cornell-empty` or a glTF file.
+    #[arg(default_value = "cornell")]
+    pub scene: String,
+    /// Override every area light's cos^n exponent.
+    #[arg(long)]
+    pub cosn: Option<f32>,
+    /// Image side in pixels.
+    #[arg(long, default_value_t = 256)]
+    pub size: u32,
+    /// Samples per pixel of the path-traced reference.
+    #[arg(long, default_value_t = 4096)]
+    pub reference_spp: u32,
+    /// Samples per pixel of the path tracer's timed render.
+    #[arg(long, default_value_t = 64)]
+    pub path_spp: u32,
+    /// Photon budgets (N_MAX), comma-separated.
+    #[arg(long, default_value = "100000,300000,1000000", value_delimiter = ',')]
+    pub n_max: Vec<u64>,
+    /// Largest spp of a photon render.
+    #[arg(long, default_value_t = 512)]
+    pub max_spp: u32,
+    /// Render every budget once at this spp (the bias sweep) instead of searching.
+    #[arg(long)]
+    pub fixed_spp: Option<u32>,
+    /// relRMSE target.
+    #[arg(long, default_value_t = 0.03)]
+    pub target: f64,
+    /// Also measure direct light alone at this spp.
+    #[arg(long)]
+    pub direct_spp: Option<u32>,
+    /// Seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[command(flatten)]
+    pub threads: ThreadArgs,
+}
+
+pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        args.target > 0.0 && args.target < 1.0,
+        "target must be in (0, 1), got {}",
+        args.target
+    );
+    let scene = open_scene(&args.scene, args.cosn)?;
+    let device = Device::new()?;
+    let rt = scene.embree_geometry(&device)?;
+    let pool = args.threads.pool()?;
+    let cfg = StudyConfig {
+        size: args.size,
+        reference_spp: args.reference_spp,
+        path_spp: args.path_spp,
+        n_max: args.n_max.clone(),
+        max_spp: args.max_spp,
+        target: args.target,
+        mode: Mode::Adaptive,
+        render: RenderConfig::new(args.size, args.size),
+        seed: args.seed,
+        fixed_spp: args.fixed_spp,
+    };
+    let log = |s: &str| eprintln!("{s}");
+    let result = pool.install(|| run_study(&scene, &rt, &cfg, &log))?;
+    let direct = match args.direct_spp {
+        Some(spp) => Some(pool.install(|| run_direct_study(&scene, &rt, &cfg, spp))?),
+        None => None,
+    };
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&json!({
+            "scene": args.scene, "cosn": args.cosn, "size": args.size,
+            "threads": pool.current_num_threads(), "loadavg": load.trim(),
+            "result": result, "direct": direct,
+        }))?
+    );
+    Ok(())
+}

@@ -1,0 +1,320 @@
+//! The rendering benchmark (`adaptive-pm bench render`): the photon render
+//! against the path tracer at equal error, all times from one run on one
+//! thread pool (only ratios of these times mean anything on a loaded machine).
+//!
+//! - **Reference**: the path tracer's image at `reference_spp` samples per
+//!   pixel (two independent halves, whose difference measures its own noise).
+//! - **Error**: relRMSE over the pixels that are not a light's own
+//!   ([`super::light_pixels`]), against the reference, emitters seen from the
+//!   camera left out of both images (exact in both, and a bright light's
+//!   jittered edge would dominate the RMSE); the reference's noise
+//!   `n_ref` adds in quadrature, so the reported error is
+//!   `sqrt(max(e^2 - n_ref^2, 0))`.
+//! - **Path tracer's time to the target**: one timed render at `path_spp`;
+//!   its error falls as `1/sqrt(spp)` (unbiased), so the time to reach the
+//!   target `e*` is `t (e / e*)^2`.
+//! - **Photon render's time to the target**: for each photon budget, trace and
+//!   build the maps (timed), then render at doubling spp (each render timed
+//!   from scratch, its cache build included) until the error is at most the
+//!   target: the time is trace + maps + that render.
+//! - **Bias**: the photon render's mean over the kept pixels against the
+//!   reference's, per channel, at the largest spp rendered.
+
+use super::path::PathPart;
+use super::path_render::{light_pixels, PathHalves};
+use super::{
+    mean_bias, relative_rmse_masked, render_path, render_with, Image, RenderConfig, RenderMaps,
+    View,
+};
+use crate::embree::CommittedScene;
+use crate::engine::{Budget, Mode, TraceConfig, Tracer};
+use crate::error::Result;
+use crate::scene::{PreparedScene, Scene};
+use serde::Serialize;
+use std::time::Instant;
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct StudyConfig {
+    /// Image size (square).
+    pub size: u32,
+    /// Samples per pixel of the reference (both halves together).
+    pub reference_spp: u32,
+    /// Samples per pixel of the path tracer's timed render.
+    pub path_spp: u32,
+    /// Photon budgets (N_MAX) to try.
+    pub n_max: Vec<u64>,
+    /// Largest spp of a photon render.
+    pub max_spp: u32,
+    /// Error target (relRMSE, e.g. 0.03).
+    pub target: f64,
+    /// Photon mode.
+    pub mode: Mode,
+    /// Base render settings (gather, cache, light samples, k).
+    pub render: RenderConfig,
+    /// Seed.
+    pub seed: u64,
+    /// Render every budget once at this spp instead of searching (the bias
+    /// sweep).
+    pub fixed_spp: Option<u32>,
+}
+
+/// One photon render.
+#[derive(Clone, Debug, Serialize)]
+pub struct PhotonRow {
+    /// N_MAX.
+    pub n_max: u64,
+    /// Photons stored.
+    pub photons: usize,
+    /// Seconds to trace.
+    pub trace_s: f64,
+    /// Seconds to build the three maps.
+    pub maps_s: f64,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seconds to render (cache build included).
+    pub render_s: f64,
+    /// Seconds to build the cache.
+    pub cache_build_s: f64,
+    /// Seconds in lookups (thread sum).
+    pub lookup_s: f64,
+    /// relRMSE against the reference, its noise removed.
+    pub rel_rmse: f64,
+    /// Mean bias per channel.
+    pub bias: [f64; 3],
+    /// trace + maps + render.
+    pub total_s: f64,
+}
+
+/// The benchmark's result.
+#[derive(Clone, Debug, Serialize)]
+pub struct StudyResult {
+    /// Relative noise of the reference.
+    pub reference_noise: f64,
+    /// Seconds of the reference.
+    pub reference_s: f64,
+    /// The path tracer's timed render: spp, seconds, error.
+    pub path_spp: u32,
+    /// Seconds of the path tracer's timed render.
+    pub path_s: f64,
+    /// Its error.
+    pub path_rel_rmse: f64,
+    /// The path tracer's time to the target (extrapolated, `1/sqrt(spp)`).
+    pub path_time_to_target_s: f64,
+    /// Every photon render.
+    pub photon: Vec<PhotonRow>,
+    /// The fastest photon render at the target: its total time.
+    pub photon_time_to_target_s: Option<f64>,
+    /// photon time / path time.
+    pub ratio: Option<f64>,
+}
+
+fn noise_free(e: f64, noise: f64) -> f64 {
+    (e * e - noise * noise).max(0.0).sqrt()
+}
+
+/// Runs the benchmark on `scene` on the current rayon pool; `log` gets one
+/// line per step.
+///
+/// # Errors
+/// Bad settings or a failed trace.
+pub fn run_study(
+    scene: &Scene,
+    rt: &CommittedScene,
+    cfg: &StudyConfig,
+    log: &dyn Fn(&str),
+) -> Result<StudyResult> {
+    let mut base = cfg.render.clone();
+    base.width = cfg.size;
+    base.height = cfg.size;
+    base.seed = cfg.seed;
+    base.view = View::Full;
+    // Emitters seen from the camera are exact in both renderers, but the
+    // jittered edge of a bright light would dominate any image RMSE.
+    base.show_emitters = false;
+    base.validate()?;
+    let keep: Vec<bool> = light_pixels(scene, rt, &base)?.iter().map(|l| !l).collect();
+
+    let t = Instant::now();
+    let mut rc = base.clone();
+    rc.spp = (cfg.reference_spp / 2).max(1);
+    rc.seed = cfg.seed ^ 0x5EF_E2E4CE;
+    let halves = PathHalves::render(scene, rt, &rc, PathPart::Full)?;
+    let reference = halves.mean();
+    let reference_noise = halves.noise_rel(Some(&keep));
+    let reference_s = t.elapsed().as_secs_f64();
+    log(&format!(
+        "reference: {} spp in {reference_s:.1} s, noise {:.3} %",
+        cfg.reference_spp,
+        100.0 * reference_noise
+    ));
+
+    let mut pc = base.clone();
+    pc.spp = cfg.path_spp;
+    let t = Instant::now();
+    let path = render_path(scene, rt, &pc, PathPart::Full, &|_, _| {})?;
+    let path_s = t.elapsed().as_secs_f64();
+    let path_err = noise_free(
+        relative_rmse_masked(&path, &reference, &keep)?,
+        reference_noise,
+    );
+    let path_time = path_s * (path_err / cfg.target).powi(2);
+    log(&format!(
+        "path: {} spp in {path_s:.2} s, relRMSE {:.2} % -> {:.0} % in {path_time:.1} s",
+        cfg.path_spp,
+        100.0 * path_err,
+        100.0 * cfg.target
+    ));
+
+    let mut rows = Vec::new();
+    let mut best: Option<f64> = None;
+    for &n_max in &cfg.n_max {
+        let mut tc = TraceConfig::new(cfg.mode, Budget::NMax(n_max));
+        tc.seed = cfg.seed;
+        let t = Instant::now();
+        let out = Tracer::new(PreparedScene::new(scene.clone(), rt)?).trace(&tc)?;
+        let trace_s = t.elapsed().as_secs_f64();
+        let maps = RenderMaps::build(&out.records());
+        let maps_s = maps.build_total_s();
+        let mut spp = cfg.fixed_spp.unwrap_or(8);
+        while spp <= cfg.max_spp.max(cfg.fixed_spp.unwrap_or(0)) {
+            let mut c = base.clone();
+            c.spp = spp;
+            let t = Instant::now();
+            let (img, stats) = render_with(scene, rt, Some(&maps), None, &c, &|_, _| {})?;
+            let render_s = t.elapsed().as_secs_f64();
+            let row = photon_row(&img, &reference, &keep, reference_noise, n_max, spp)?;
+            let row = PhotonRow {
+                photons: out.photons.len(),
+                trace_s,
+                maps_s,
+                render_s,
+                cache_build_s: stats.cache_build_s,
+                lookup_s: stats.lookup_s,
+                total_s: trace_s + maps_s + render_s,
+                ..row
+            };
+            log(&format!(
+                "photon N_MAX {n_max}: {spp} spp, total {:.2} s (render {render_s:.2}), relRMSE {:.2} %, bias {:+.2} {:+.2} {:+.2} %",
+                row.total_s,
+                100.0 * row.rel_rmse,
+                100.0 * row.bias[0],
+                100.0 * row.bias[1],
+                100.0 * row.bias[2]
+            ));
+            let reached = row.rel_rmse <= cfg.target;
+            if reached {
+                best = Some(best.map_or(row.total_s, |b: f64| b.min(row.total_s)));
+            }
+            rows.push(row);
+            if reached || cfg.fixed_spp.is_some() {
+                break;
+            }
+            spp *= 2;
+        }
+    }
+    Ok(StudyResult {
+        reference_noise,
+        reference_s,
+        path_spp: cfg.path_spp,
+        path_s,
+        path_rel_rmse: path_err,
+        path_time_to_target_s: path_time,
+        photon: rows,
+        photon_time_to_target_s: best,
+        ratio: best.map(|b| b / path_time),
+    })
+}
+
+fn photon_row(
+    img: &Image,
+    reference: &Image,
+    keep: &[bool],
+    noise: f64,
+    n_max: u64,
+    spp: u32,
+) -> Result<PhotonRow> {
+    Ok(PhotonRow {
+        n_max,
+        photons: 0,
+        trace_s: 0.0,
+        maps_s: 0.0,
+        spp,
+        render_s: 0.0,
+        cache_build_s: 0.0,
+        lookup_s: 0.0,
+        rel_rmse: noise_free(relative_rmse_masked(img, reference, keep)?, noise),
+        bias: mean_bias(img, reference, keep)?,
+        total_s: 0.0,
+    })
+}
+
+/// One direct-light render.
+#[derive(Clone, Debug, Serialize)]
+pub struct DirectRow {
+    /// `path` (the path tracer's direct part) or `photon` (this renderer's).
+    pub renderer: &'static str,
+    /// Light samples per camera sample.
+    pub light_samples: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seconds.
+    pub seconds: f64,
+    /// relRMSE against the direct reference, its noise removed.
+    pub rel_rmse: f64,
+    /// Efficiency `1 / (relRMSE^2 s)`: higher is better.
+    pub efficiency: f64,
+}
+
+/// Direct light alone: the path tracer's direct part at `reference_spp` as
+/// the reference; the path tracer's direct part and this renderer's
+/// direct-only view (1, 2 and 4 light samples) at `spp`, each timed.
+///
+/// # Errors
+/// Bad settings.
+pub fn run_direct_study(
+    scene: &Scene,
+    rt: &CommittedScene,
+    cfg: &StudyConfig,
+    spp: u32,
+) -> Result<Vec<DirectRow>> {
+    let mut base = cfg.render.clone();
+    base.width = cfg.size;
+    base.height = cfg.size;
+    base.seed = cfg.seed;
+    base.show_emitters = false;
+    base.validate()?;
+    let keep: Vec<bool> = light_pixels(scene, rt, &base)?.iter().map(|l| !l).collect();
+    let mut rc = base.clone();
+    rc.spp = (cfg.reference_spp / 2).max(1);
+    rc.seed = cfg.seed ^ 0xD1_2EC7;
+    let halves = PathHalves::render(scene, rt, &rc, PathPart::Direct)?;
+    let reference = halves.mean();
+    let noise = halves.noise_rel(Some(&keep));
+    let row = |renderer, light_samples, seconds: f64, img: &Image| -> Result<DirectRow> {
+        let e = noise_free(relative_rmse_masked(img, &reference, &keep)?, noise);
+        Ok(DirectRow {
+            renderer,
+            light_samples,
+            spp,
+            seconds,
+            rel_rmse: e,
+            efficiency: 1.0 / (e * e * seconds).max(1e-30),
+        })
+    };
+    let mut rows = Vec::new();
+    let mut pc = base.clone();
+    pc.spp = spp;
+    let t = Instant::now();
+    let img = render_path(scene, rt, &pc, PathPart::Direct, &|_, _| {})?;
+    rows.push(row("path", 1, t.elapsed().as_secs_f64(), &img)?);
+    for l in [1, 2, 4] {
+        let mut c = pc.clone();
+        c.view = View::DirectOnly;
+        c.light_samples = l;
+        let t = Instant::now();
+        let (img, _) = render_with(scene, rt, None, None, &c, &|_, _| {})?;
+        rows.push(row("photon", l, t.elapsed().as_secs_f64(), &img)?);
+    }
+    Ok(rows)
+}
