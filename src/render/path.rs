@@ -31,6 +31,9 @@
 //! Pixel sampling and determinism follow [`super::render`]: pixel `p`'s sample
 //! `s` draws from `Rng::new(hash2(hash2(seed, p), s))`.
 
+// `!(x > 0.0)` is deliberate here: it rejects NaN with the non-positive values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::path_light::{area_light_pdf, next_event};
 use super::ray_epsilon;
 use crate::embree::{CommittedScene, Ray};

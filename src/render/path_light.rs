@@ -2,6 +2,9 @@
 //! a surface point, area lights weighted against BRDF sampling by the power
 //! heuristic (see [`super::path`]).
 
+// `!(x > 0.0)` is deliberate here: it rejects NaN with the non-positive values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::path::{power_heuristic, PathTracer};
 use crate::brdf::Brdf;
 use crate::embree::Ray;

@@ -8,6 +8,9 @@
 //! that level; up to a factor [`MAX_EXTRAPOLATION`] beyond its measured range
 //! the end segment is extended, further out the mode has no value there.
 
+// `!(x > 0.0)` is deliberate here: it rejects NaN with the non-positive values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::measure::RunOutput;
 use super::reference::Reference;
 use super::{Run, TradeoffConfig};
