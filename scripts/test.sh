@@ -1,6 +1,26 @@
 #!/usr/bin/env bash
-# Sets up a fresh machine and runs the whole test suite.
+# Sets up a fresh machine and runs the whole test suite:
+# 1. the unit, integration and doc tests (cargo test);
+# 2. the downstream renderer (a library user with default features off), the
+#    dependency count and the MSRV check (scripts/ci-downstream.sh);
+# 3. a sharded trace on a real single-node Slurm, merged and checked against a
+#    single run (scripts/ci-slurm.sh; needs root for its packages and daemons,
+#    so it is skipped with a note elsewhere);
+# 4. the scene-loading fuzzer for 60 s (scripts/ci-fuzz.sh; needs the nightly
+#    toolchain, skipped with a note where there is none).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
 cargo test --workspace --locked
+bash scripts/ci-downstream.sh
+if [ "$(id -u)" -eq 0 ]; then
+    cargo build --release --locked
+    bash scripts/ci-slurm.sh 4
+else
+    echo "test.sh: not root: the Slurm test (scripts/ci-slurm.sh) is skipped" >&2
+fi
+if rustup toolchain list 2>/dev/null | grep -q '^nightly'; then
+    bash scripts/ci-fuzz.sh "${FUZZ_SECONDS:-60}"
+else
+    echo "test.sh: no nightly toolchain: the fuzzer (scripts/ci-fuzz.sh) is skipped" >&2
+fi

@@ -74,12 +74,21 @@ fn create_temp(path: &Path) -> Result<(PathBuf, File)> {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
     let parent = parent_of(path);
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
     let nanos = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.subsec_nanos());
     for _ in 0..64 {
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let tmp = parent.join(format!(".{name}.tmp-{}-{n}-{nanos:x}", std::process::id()));
+        // The target's extension stays last: encoders that pick a format
+        // from the path (plotters' PNG, exr) must see the real one.
+        let tmp = parent.join(format!(
+            ".{name}.tmp-{}-{n}-{nanos:x}{ext}",
+            std::process::id()
+        ));
         match OpenOptions::new().write(true).create_new(true).open(&tmp) {
             Ok(f) => return Ok((tmp, f)),
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,

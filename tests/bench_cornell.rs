@@ -117,6 +117,9 @@ fn every_file_is_written_and_every_csv_parses() {
     let col = |name: &str| h.iter().position(|c| c == name).unwrap();
     let text_cols = [
         col("role"),
+        col("scene"),
+        col("max_density_primary_mesh"),
+        col("max_density_primary_at"),
         col("mode"),
         col("budget_bound"),
         col("split_rate_by_depth"),

@@ -6,6 +6,7 @@ pub mod bench;
 pub mod common;
 pub mod merge;
 pub mod render;
+pub mod render_path;
 pub mod scene;
 pub mod shard;
 pub mod trace;

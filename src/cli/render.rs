@@ -6,8 +6,8 @@ use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Mode, Tracer};
 use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
-    cache::DEFAULT_STRIDE, check_output_path, render_path, render_with, Integrator, PathHalves,
-    PathPart, RenderConfig, RenderMaps, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
+    cache::DEFAULT_STRIDE, check_output_path, render_with, Integrator, RenderConfig, RenderMaps,
+    ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
 };
 use adaptive_pm::scene::PreparedScene;
 use serde_json::json;
@@ -114,7 +114,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let rt = scene.embree_geometry(&device)?;
     let bar = progress_bar(!args.json);
     if args.integrator == Integrator::Path {
-        return run_path(&args, &scene, &rt, &cfg, &pool);
+        return super::render_path::run_path(&args, &scene, &rt, &cfg, &pool);
     }
     let (maps, trace_s, photons): (Option<RenderMaps>, f64, usize) = if view == View::DirectOnly {
         (None, 0.0, 0)
@@ -211,61 +211,6 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         if let Some(p) = &args.png {
             println!("wrote {}", p.display());
         }
-    }
-    Ok(())
-}
-
-/// `--integrator path`: the image from two independent halves, and its noise.
-fn run_path(
-    args: &RenderArgs,
-    scene: &adaptive_pm::scene::Scene,
-    rt: &adaptive_pm::embree::CommittedScene,
-    cfg: &RenderConfig,
-    pool: &rayon::ThreadPool,
-) -> anyhow::Result<()> {
-    let part = match cfg.view {
-        View::Full => PathPart::Full,
-        View::DirectOnly => PathPart::Direct,
-        View::Map { .. } => anyhow::bail!("--visualize-map needs --integrator photon"),
-    };
-    let t = Instant::now();
-    let image = if cfg.spp >= 2 {
-        let mut half = cfg.clone();
-        half.spp = cfg.spp / 2;
-        let h = pool.install(|| PathHalves::render(scene, rt, &half, part))?;
-        let noise = h.noise_rel(None);
-        eprintln!(
-            "path tracer noise (two halves): {:.3} % rms of the mean",
-            100.0 * noise
-        );
-        h.mean()
-    } else {
-        pool.install(|| render_path(scene, rt, cfg, part, &|_, _| {}))?
-    };
-    let secs = t.elapsed().as_secs_f64();
-    image.write_exr(&args.out)?;
-    if let Some(p) = &args.png {
-        image.write_png(
-            p,
-            ToneMap {
-                exposure: args.exposure,
-            },
-        )?;
-    }
-    let m = image.mean();
-    if args.json {
-        println!(
-            "{}",
-            json!({"scene": args.scene, "integrator": "path", "width": args.width,
-            "height": args.height, "spp": cfg.spp, "render_s": secs,
-            "mean_rgb": [m.x, m.y, m.z], "out": args.out})
-        );
-    } else {
-        println!(
-            "path on {}: render {secs:.3} s, mean RGB {:.4} {:.4} {:.4}",
-            args.scene, m.x, m.y, m.z
-        );
-        println!("wrote {}", args.out.display());
     }
     Ok(())
 }
