@@ -19,6 +19,11 @@ use crate::scene::Scene;
 use glam::Vec3;
 use std::sync::Arc;
 
+/// Embree's `FLT_LARGE` (`common/math/constants.h`): `RayK::valid()`
+/// asserts that every origin and direction coordinate is at most this in
+/// magnitude. A ray beyond it aborts the process, so it never reaches Embree.
+pub const EMBREE_LARGE: f32 = 1.844e18;
+
 /// A ray segment `origin + t * dir`, `t` in `[tnear, tfar]`. `dir` need not
 /// be unit length; `t` is measured in units of `dir`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -289,10 +289,7 @@ impl std::fmt::Debug for CommittedScene {
     }
 }
 
-/// Embree's `FLT_LARGE` (`common/math/constants.h`): `RayK::valid()`
-/// asserts that every origin and direction coordinate is at most this in
-/// magnitude. A ray beyond it aborts the process, so it never reaches Embree.
-pub const EMBREE_LARGE: f32 = 1.844e18;
+pub use crate::raycast::EMBREE_LARGE;
 
 /// Whether Embree may be given this ray (see the module docs).
 #[inline]

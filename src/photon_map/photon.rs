@@ -132,6 +132,7 @@ impl CompactPhoton {
     /// The photon whose [`CompactPhoton::bits`] are `(a, b)`, without a kd-tree split
     /// axis (photon files store photons this way).
     #[inline]
+    #[cfg_attr(not(feature = "embree"), allow(dead_code))] // photon files only
     pub(crate) fn from_bits(a: u64, b: u64) -> CompactPhoton {
         let mut p = CompactPhoton {
             pos: a,

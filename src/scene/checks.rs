@@ -1,12 +1,12 @@
 //! The invariants [`super::Scene`]'s constructors enforce, so that a scene
 //! built in code or loaded from a file never panics or aborts later: every
 //! coordinate finite and within [`MAX_COORDINATE`] (Embree aborts on a ray
-//! beyond [`crate::embree::EMBREE_LARGE`]), every derived quantity (areas,
+//! beyond [`crate::raycast::EMBREE_LARGE`]), every derived quantity (areas,
 //! powers, directions) finite.
 
 use super::{AreaLight, Camera, Emission, Light, Material, Mesh};
-use crate::embree::EMBREE_LARGE;
 use crate::error::{Error, Result};
+use crate::raycast::EMBREE_LARGE;
 use crate::sampling::luminance;
 use glam::Vec3;
 

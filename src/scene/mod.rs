@@ -23,6 +23,7 @@ mod surface;
 #[cfg(feature = "gltf")]
 pub mod validate;
 
+#[cfg(feature = "gltf")]
 pub use buffers::{percent_decode, resolve_inside, MAX_BUFFER_BYTES};
 pub use checks::MAX_COORDINATE;
 
@@ -41,9 +42,12 @@ use std::path::Path;
 #[doc(hidden)]
 pub const BUILTIN_CORNELL: &str = "cornell";
 /// The empty Cornell box (walls and light, no blocks): the paper's scene.
+#[doc(hidden)]
 pub const BUILTIN_CORNELL_EMPTY: &str = "cornell-empty";
 
-/// The names of every built-in scene ([`Scene::open`] accepts each).
+/// The names of every built-in scene (`Scene::open` accepts each).
+#[cfg(feature = "gltf")]
+#[doc(hidden)]
 pub fn builtin_names() -> Vec<&'static str> {
     cornell::BUILTINS.iter().map(|(n, _)| *n).collect()
 }
