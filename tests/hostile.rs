@@ -169,6 +169,16 @@ fn messages_say_what_is_wrong() {
 /// Every other file kept here (fuzzer finds) loads to an error or a valid
 /// scene, without panicking.
 #[test]
+fn glb_length_under_its_header_is_a_clear_error() {
+    // Found by the fuzzer: the gltf crate subtracted 12 from it unchecked.
+    let copy = tempfile::tempdir().unwrap();
+    let target = copy.path().join("scene.glb");
+    std::fs::copy(dir().join("fuzz-glb-length-under-header"), &target).unwrap();
+    let e = Scene::load(&target).unwrap_err().to_string();
+    assert!(e.contains("GLB header declares"), "{e}");
+}
+
+#[test]
 fn fuzzer_finds_replay_without_panic() {
     for entry in std::fs::read_dir(dir()).unwrap() {
         let p = entry.unwrap().path();

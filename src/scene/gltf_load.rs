@@ -47,6 +47,7 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
         path: base.map(Path::to_path_buf).unwrap_or_default(),
         source: Box::new(e),
     };
+    check_glb_header(bytes)?;
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(wrap)?;
     super::validate::check_document(gltf.document.as_json())?;
     let buffers = super::buffers::load_buffers(gltf.document.as_json(), gltf.blob.clone(), base)?;
@@ -256,5 +257,29 @@ fn convert_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Resu
             "light `{}` is directional; only point and spot lights are supported",
             light.name().unwrap_or("?")
         ))),
+    }
+}
+
+/// The GLB header's declared length must cover the header itself and fit the
+/// file: the gltf crate subtracts the header size from it unchecked (found by
+/// the fuzzer: a declared length under 12 overflows, a panic in debug builds).
+fn check_glb_header(bytes: &[u8]) -> Result<()> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let field = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    match field(8) {
+        Some(length) if (12..=bytes.len()).contains(&length) => Ok(()),
+        Some(length) => Err(Error::InvalidScene(format!(
+            "the GLB header declares {length} bytes; the file has {} (at least 12 needed)",
+            bytes.len()
+        ))),
+        None => Err(Error::InvalidScene(
+            "the GLB file is shorter than its 12-byte header".into(),
+        )),
     }
 }
