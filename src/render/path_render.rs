@@ -126,7 +126,7 @@ impl PathHalves {
 /// (a light's own pixel, excluded from the trade study's image errors).
 ///
 /// # Errors
-/// [`Error::InvalidScene`] when neither `cfg` nor the scene has a camera.
+/// [`crate::Error::InvalidScene`] when neither `cfg` nor the scene has a camera.
 pub fn light_pixels(scene: &Scene, rt: &CommittedScene, cfg: &RenderConfig) -> Result<Vec<bool>> {
     let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
     let w = cfg.width as usize;

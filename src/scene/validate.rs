@@ -3,10 +3,10 @@
 //! The gltf crate's accessors (`Node::mesh`, `Camera::projection`,
 //! `Light::kind`, the accessor readers, ...) index and `unwrap` without
 //! checking; a hostile file makes them panic, loop or allocate without bound.
-//! [`check_document`] runs on the parsed JSON before any of them is called and
-//! checks every reference, enum and number the loader uses; [`super::gltf_data`]
+//! `check_document` runs on the parsed JSON before any of them is called and
+//! checks every reference, enum and number the loader uses; `gltf_data`
 //! then checks every byte range against the loaded buffers, and
-//! [`super::gltf_graph`] the node graph. Each problem is one
+//! `gltf_graph` the node graph. Each problem is one
 //! [`Error::InvalidScene`] naming the node, mesh, accessor, camera or light.
 //!
 
