@@ -176,19 +176,7 @@ impl<'a> LightSampler<'a> {
                 let le = a.emission.radiance * a.emission.profile.eval(Vec3::new(0.0, 0.0, cos_l));
                 Some((p, le * cos_l * a.area / r2))
             }
-            Light::Point(p) => {
-                let r2 = (x - p.position).length_squared();
-                (r2 > 0.0).then(|| (p.position, p.intensity / r2))
-            }
-            Light::Spot(s) => {
-                let d = x - s.position;
-                let r2 = d.length_squared();
-                if r2 <= 0.0 {
-                    return None;
-                }
-                let f = s.falloff(s.direction.dot(d) / r2.sqrt());
-                (f > 0.0).then(|| (s.position, s.intensity * f / r2))
-            }
+            light => punctual_arrival(light, x),
         }
     }
 
@@ -224,6 +212,28 @@ impl<'a> LightSampler<'a> {
             return Vec3::ZERO;
         }
         f * le_g * (cos_x / prob)
+    }
+}
+
+/// A punctual light's position and `I / r^2` (times a spot's falloff)
+/// arriving at `x`, before `cos(theta_x)` and visibility; `None` for an area
+/// light, a point at the light, or outside a spot's cone.
+pub(super) fn punctual_arrival(light: &Light, x: Vec3) -> Option<(Vec3, Vec3)> {
+    match light {
+        Light::Area(_) => None,
+        Light::Point(p) => {
+            let r2 = (x - p.position).length_squared();
+            (r2 > 0.0).then(|| (p.position, p.intensity / r2))
+        }
+        Light::Spot(s) => {
+            let d = x - s.position;
+            let r2 = d.length_squared();
+            if r2 <= 0.0 {
+                return None;
+            }
+            let f = s.falloff(s.direction.dot(d) / r2.sqrt());
+            (f > 0.0).then(|| (s.position, s.intensity * f / r2))
+        }
     }
 }
 

@@ -7,48 +7,10 @@
 //! Point light of intensity `I`: `I cos(theta_x) / r^2 V`; spot light: the same
 //! times its falloff (the smoothstep of [`crate::scene::SpotLight`]).
 
-use super::direct::SHADOW_EPS;
+use super::direct::{punctual_arrival, SHADOW_EPS};
 use crate::embree::{CommittedScene, Ray};
-use crate::rng::Rng;
 use crate::scene::{Light, Scene, SurfacePoint};
 use glam::Vec3;
-
-/// One light sample: the point, the radiance (area) or intensity (punctual)
-/// arriving at `x` times the geometry term, before the BRDF and visibility.
-/// Returns the light point and `L * G / pdf` with `G` excluding `cos(theta_x)`.
-fn light_sample(light: &Light, x: Vec3, rng: &mut Rng) -> Option<(Vec3, Vec3)> {
-    match light {
-        Light::Area(a) => {
-            let e = a.sample(rng.next_f32(), rng.next_2d(), [0.5, 0.5]);
-            let n_l = e.normal?;
-            let d = x - e.origin;
-            let r2 = d.length_squared();
-            if r2 <= 0.0 {
-                return None;
-            }
-            let cos_l = n_l.dot(d) / r2.sqrt();
-            if cos_l <= 0.0 {
-                return None;
-            }
-            let le = a.emission.radiance * a.emission.profile.eval(Vec3::new(0.0, 0.0, cos_l));
-            // pdf = 1 / area (area-uniform).
-            Some((e.origin, le * cos_l * a.area / r2))
-        }
-        Light::Point(p) => {
-            let r2 = (x - p.position).length_squared();
-            (r2 > 0.0).then(|| (p.position, p.intensity / r2))
-        }
-        Light::Spot(s) => {
-            let d = x - s.position;
-            let r2 = d.length_squared();
-            if r2 <= 0.0 {
-                return None;
-            }
-            let f = s.falloff(s.direction.dot(d) / r2.sqrt());
-            (f > 0.0).then(|| (s.position, s.intensity * f / r2))
-        }
-    }
-}
 
 /// Direct irradiance at `x` (normal `n`) by a midpoint rule: every area-light
 /// triangle cut into `grid^2` similar sub-triangles, each sampled at its
@@ -108,8 +70,7 @@ pub fn quadrature_irradiance(
                 }
             }
             Light::Point(_) | Light::Spot(_) => {
-                let mut rng = Rng::new(0);
-                if let Some((p, ig)) = light_sample(light, x, &mut rng) {
+                if let Some((p, ig)) = punctual_arrival(light, x) {
                     let cos_x = (p - x).normalize_or_zero().dot(n);
                     if cos_x > 0.0 && visible(p) {
                         e += ig * cos_x;
