@@ -174,8 +174,16 @@ fn glb_length_under_its_header_is_a_clear_error() {
     let copy = tempfile::tempdir().unwrap();
     let target = copy.path().join("scene.glb");
     std::fs::copy(dir().join("fuzz-glb-length-under-header"), &target).unwrap();
-    let e = Scene::load(&target).unwrap_err().to_string();
-    assert!(e.contains("GLB header declares"), "{e}");
+    let e = Scene::load(&target).unwrap_err();
+    assert!(matches!(e, Error::Load { .. }), "{e}");
+    let cause = std::error::Error::source(&e).map(|s| s.to_string());
+    assert!(
+        cause
+            .as_deref()
+            .unwrap_or("")
+            .contains("GLB header declares"),
+        "{e}: {cause:?}"
+    );
 }
 
 #[test]

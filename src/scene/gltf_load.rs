@@ -47,7 +47,10 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
         path: base.map(Path::to_path_buf).unwrap_or_default(),
         source: Box::new(e),
     };
-    check_glb_header(bytes)?;
+    check_glb_header(bytes).map_err(|message| Error::Load {
+        path: base.map(Path::to_path_buf).unwrap_or_default(),
+        source: message.into(),
+    })?;
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(wrap)?;
     super::validate::check_document(gltf.document.as_json())?;
     let buffers = super::buffers::load_buffers(gltf.document.as_json(), gltf.blob.clone(), base)?;
@@ -263,7 +266,7 @@ fn convert_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Resu
 /// The GLB header's declared length must cover the header itself and fit the
 /// file: the gltf crate subtracts the header size from it unchecked (found by
 /// the fuzzer: a declared length under 12 overflows, a panic in debug builds).
-fn check_glb_header(bytes: &[u8]) -> Result<()> {
+fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
     if !bytes.starts_with(b"glTF") {
         return Ok(());
     }
@@ -274,12 +277,10 @@ fn check_glb_header(bytes: &[u8]) -> Result<()> {
     };
     match field(8) {
         Some(length) if (12..=bytes.len()).contains(&length) => Ok(()),
-        Some(length) => Err(Error::InvalidScene(format!(
+        Some(length) => Err(format!(
             "the GLB header declares {length} bytes; the file has {} (at least 12 needed)",
             bytes.len()
-        ))),
-        None => Err(Error::InvalidScene(
-            "the GLB file is shorter than its 12-byte header".into(),
         )),
+        None => Err("the GLB file is shorter than its 12-byte header".into()),
     }
 }
