@@ -38,6 +38,8 @@ const PARALLEL_MIN: usize = 1 << 14;
 pub struct PhotonMap {
     pub(crate) photons: Vec<CompactPhoton>,
     pub(crate) quant: Quantizer,
+    /// Smallest and largest grid coordinate per axis (see [`grid_bounds`]).
+    pub(crate) bounds: [[f32; 3]; 2],
     skipped: usize,
 }
 
@@ -106,6 +108,7 @@ impl PhotonMap {
         );
         build_subtree(&mut photons);
         PhotonMap {
+            bounds: grid_bounds(&photons),
             photons,
             quant,
             skipped,
@@ -135,6 +138,7 @@ impl PhotonMap {
         }
         build_subtree(&mut photons);
         PhotonMap {
+            bounds: grid_bounds(&photons),
             photons,
             quant,
             skipped: 0,
@@ -211,6 +215,32 @@ impl PhotonMap {
             hash2(hash2(h, a), b)
         })
     }
+}
+
+/// The photons' bounding box in grid units. Queries start from the gap to it:
+/// the split planes alone bound only the axes split on, and a map of one plane
+/// (a floor's caustic) is never split across it, so a query far off that plane
+/// would otherwise visit every leaf.
+fn grid_bounds(photons: &[CompactPhoton]) -> [[f32; 3]; 2] {
+    let empty = || ([u32::MAX; 3], [0u32; 3]);
+    let (lo, hi) = photons
+        .par_iter()
+        .with_min_len(PARALLEL_MIN)
+        .fold(empty, |(lo, hi), p| {
+            let g = p.grid();
+            (
+                [0, 1, 2].map(|a| lo[a].min(g[a])),
+                [0, 1, 2].map(|a| hi[a].max(g[a])),
+            )
+        })
+        .reduce(empty, |a, b| {
+            (
+                [0, 1, 2].map(|i| a.0[i].min(b.0[i])),
+                [0, 1, 2].map(|i| a.1[i].max(b.1[i])),
+            )
+        });
+    // The same conversion as a photon's distance (`query::dist2`).
+    [lo.map(|v| v as i32 as f32), hi.map(|v| v as i32 as f32)]
 }
 
 fn is_valid(r: &PhotonRecord) -> bool {

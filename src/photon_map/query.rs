@@ -72,7 +72,8 @@ impl PhotonMap {
         if max_radius == f32::INFINITY {
             search.r2 = f32::INFINITY;
         }
-        search.visit(&self.photons, 0, [0.0; 3]);
+        let off = self.root_gap(&search.q);
+        search.visit(&self.photons, 0, off);
         sort_neighbors(out);
         for n in out.iter_mut() {
             n.dist2 = self.quant.world_dist2(n.dist2);
@@ -96,10 +97,29 @@ impl PhotonMap {
             },
             out,
         };
-        search.visit(&self.photons, 0, [0.0; 3]);
+        let off = self.root_gap(&search.q);
+        search.visit(&self.photons, 0, off);
         for n in out.iter_mut() {
             n.dist2 = self.quant.world_dist2(n.dist2);
         }
+    }
+}
+
+impl PhotonMap {
+    /// Per-axis gaps from `q` (grid units) to the photons' bounding box: the
+    /// root's region. A subtraction of the same values as [`dist2`]'s, so the
+    /// bound never exceeds a photon's distance.
+    fn root_gap(&self, q: &[f32; 3]) -> [f32; 3] {
+        let [lo, hi] = &self.bounds;
+        [0, 1, 2].map(|a| {
+            if q[a] < lo[a] {
+                lo[a] - q[a]
+            } else if q[a] > hi[a] {
+                q[a] - hi[a]
+            } else {
+                0.0
+            }
+        })
     }
 }
 
