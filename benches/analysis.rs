@@ -1,10 +1,15 @@
 //! Directionality analysis timings: step 1 (sampling) and steps 3-4
-//! (clustering + solid angles) separately, per function, plus whole BRDF
+//! (clustering + solid angles, one per sample set, as the estimator runs
+//! them) separately, the whole analysis of one function (`whole/`, what a
+//! scene pays per emitter or per BRDF incident angle), plus whole BRDF
 //! tables. Targets: one analysis < 1 ms, one table < 20 ms, on one core.
 
 use adaptive_pm::analysis::sampling::{sample, Placement, Target};
-use adaptive_pm::analysis::{analyze_brdf, find_peaks, AnalysisParams, Estimator};
+use adaptive_pm::analysis::{
+    analyze_brdf, analyze_brdf_at, analyze_emitter, find_peaks, AnalysisParams, Estimator,
+};
 use adaptive_pm::brdf::{Brdf, CookTorrance, Phong};
+use adaptive_pm::emitter::CosN;
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
 
@@ -39,7 +44,26 @@ fn bench(c: &mut Criterion) {
         });
         let set = sample(target(&b, wi, n), Placement::Stratified, &p);
         g.bench_function(format!("cluster/{name}"), |bn| {
-            bn.iter(|| find_peaks(black_box(&set.dirs), &set.values, set.drawn, &p))
+            bn.iter(|| {
+                let mut start = 0;
+                for &end in &set.set_ends {
+                    let d = &set.dirs[start..end];
+                    black_box(find_peaks(
+                        black_box(d),
+                        &set.values[start..end],
+                        set.drawn,
+                        &p,
+                    ));
+                    start = end;
+                }
+            })
+        });
+        g.bench_function(format!("whole/{name}"), |bn| match &b {
+            Some(b) => bn.iter(|| analyze_brdf_at(black_box(b), wi.z, Estimator::Paper, &p)),
+            None => {
+                let e = CosN::new(n).unwrap();
+                bn.iter(|| analyze_emitter(black_box(&e), Estimator::Paper, &p))
+            }
         });
     }
     g.finish();

@@ -143,9 +143,11 @@ pub fn write_with(
     finish(path, &tmp, written)
 }
 
-/// Writes to `path` atomically through `write`, given the path of the
-/// (already created, empty) temporary file: for encoders that open a path
-/// themselves (EXR, plotters).
+/// Writes to `path` atomically through `write`, given the path of a fresh
+/// file to create: for encoders that open a path themselves (EXR, plotters).
+/// That file lies in a private folder (`0700`, created exclusively beside
+/// the target), so nobody else can plant a link at its name between our
+/// creating it and the encoder's opening it.
 ///
 /// # Errors
 /// As [`write_bytes`], and whatever `write` returns.
@@ -155,10 +157,35 @@ pub fn write_via_path(
 ) -> Result<()> {
     let path = path.as_ref();
     check_target(path)?;
-    let (tmp, file) = create_temp(path)?;
-    drop(file);
-    let written = write(&tmp);
-    finish(path, &tmp, written)
+    let dir = create_private_dir(path)?;
+    let inner = dir.join(path.file_name().unwrap_or_else(|| "out".as_ref()));
+    let written = write(&inner);
+    let done = finish(path, &inner, written);
+    let _ = std::fs::remove_dir(&dir);
+    done
+}
+
+/// Creates a fresh folder beside `path` that only we can enter.
+fn create_private_dir(path: &Path) -> Result<PathBuf> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let parent = parent_of(path);
+    for _ in 0..64 {
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let dir = parent.join(format!(".{name}.tmpdir-{}-{n}", std::process::id()));
+        let mut builder = std::fs::DirBuilder::new();
+        #[cfg(unix)]
+        std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
+        match builder.create(&dir) {
+            Ok(()) => return Ok(dir),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(io_err(path, e)),
+        }
+    }
+    Err(invalid(path, "cannot create a temporary folder beside it"))
 }
 
 /// Checks, before a long run, that `path` will be writable: [`check_target`],

@@ -150,3 +150,32 @@ fn safe_writes_replace_whole_files_and_refuse_devices() {
         .file_type()
         .is_char_device());
 }
+
+#[test]
+fn encoders_that_open_a_path_write_in_a_private_folder() {
+    use adaptive_pm::output::write_via_path;
+    use std::os::unix::fs::PermissionsExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path().join("fig.png");
+    write_via_path(&p, |inner| {
+        // The encoder sees the target's name (its extension picks the
+        // format) inside a folder only we can enter.
+        assert_eq!(inner.file_name(), p.file_name());
+        let mode = std::fs::metadata(inner.parent().unwrap())
+            .unwrap()
+            .permissions()
+            .mode();
+        assert_eq!(mode & 0o077, 0, "mode {mode:o}");
+        std::fs::write(inner, b"png")
+    })
+    .unwrap();
+    assert_eq!(std::fs::read(&p).unwrap(), b"png");
+    // A failing encoder leaves the target whole and nothing beside it.
+    let failed = write_via_path(&p, |inner| {
+        std::fs::write(inner, b"half")?;
+        Err(std::io::Error::other("killed"))
+    });
+    assert!(failed.is_err());
+    assert_eq!(std::fs::read(&p).unwrap(), b"png");
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 1);
+}

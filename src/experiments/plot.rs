@@ -225,11 +225,45 @@ fn draw<DB: DrawingBackend>(
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font(("sans-serif", 15))
-        .position(SeriesLabelPosition::UpperRight)
+        .position(legend_corner(plot, (x0, x1), (y0, y1)))
         .draw()
         .map_err(|x| e(&x))?;
     root.present().map_err(|x| e(&x))?;
     Ok(())
+}
+
+/// The corner whose box (the outer 45 % of x, 30 % of y) covers the fewest
+/// data points, so the legend hides as little as possible; a reference line
+/// crossing a box counts as a whole series.
+fn legend_corner(plot: &Plot, x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+    let fx = |v: f64| (v - x.0) / (x.1 - x.0);
+    let fy = |v: f64| (v - y.0) / (y.1 - y.0);
+    let count = |right: bool, top: bool| {
+        let in_x = |v: f64| if right { fx(v) > 0.55 } else { fx(v) < 0.45 };
+        let in_y = |v: f64| if top { fy(v) > 0.7 } else { fy(v) < 0.3 };
+        let points = plot
+            .series
+            .iter()
+            .flat_map(|s| &s.points)
+            .filter(|p| in_x(p.0) && in_y(p.1))
+            .count();
+        let per_line = plot
+            .series
+            .iter()
+            .map(|s| s.points.len())
+            .max()
+            .unwrap_or(1);
+        points + plot.lines.iter().filter(|l| in_y(l.y)).count() * per_line
+    };
+    [
+        (SeriesLabelPosition::UpperRight, true, true),
+        (SeriesLabelPosition::UpperLeft, false, true),
+        (SeriesLabelPosition::LowerRight, true, false),
+        (SeriesLabelPosition::LowerLeft, false, false),
+    ]
+    .into_iter()
+    .min_by_key(|(_, right, top)| count(*right, *top))
+    .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
 }
 
 /// Writes `plot` to `stem.svg` and `stem.png`.
