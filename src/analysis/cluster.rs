@@ -146,8 +146,8 @@ impl Live {
             .chain(&lanes)
             .fold(f32::NEG_INFINITY, |a, &b| if b > a { b } else { a });
         let mut best: Option<usize> = None;
-        for k in 0..n {
-            if md[k] == top && best.is_none_or(|b| self.id[k] < self.id[b]) {
+        for (k, &m) in md.iter().enumerate() {
+            if m == top && best.is_none_or(|b| self.id[k] < self.id[b]) {
                 best = Some(k);
             }
         }
