@@ -41,10 +41,10 @@ pub struct TradeoffArgs {
     #[arg(long, default_value_t = 32)]
     pub height: u32,
     /// Samples per pixel of the photon renders.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = TradeoffConfig::default().spp)]
     pub spp: u32,
     /// Samples per pixel of each half of the path-traced reference.
-    #[arg(long, default_value_t = 8192)]
+    #[arg(long, default_value_t = TradeoffConfig::default().reference_spp)]
     pub reference_spp: u32,
     /// Fixed surface points of the irradiance error.
     #[arg(long, default_value_t = 128)]
