@@ -198,9 +198,7 @@ impl Image {
             .iter()
             .flat_map(|p| [tone.apply(p.x), tone.apply(p.y), tone.apply(p.z)])
             .collect();
-        write_atomic(path.as_ref(), |tmp| {
-            // The temporary file exists (created exclusively): open it, do not create.
-            let file = std::io::BufWriter::new(std::fs::OpenOptions::new().write(true).open(tmp)?);
+        crate::output::write_with(path.as_ref(), |file| {
             let mut enc = png::Encoder::new(file, self.width, self.height);
             enc.set_color(png::ColorType::Rgb);
             enc.set_depth(png::BitDepth::Eight);
