@@ -266,5 +266,12 @@ fn bench_tracer(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_rays, bench_tracer);
+// No plots: criterion's plotters backend needs a system font, which these
+// machines lack (it panicked after the first measurement); the numbers are
+// in the terminal and in target/criterion.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = bench_rays, bench_tracer
+}
 criterion_main!(benches);
