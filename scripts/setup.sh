@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs what adaptive-pm needs on a fresh Debian or Ubuntu machine:
-# Embree (3 or 4, whichever the distribution ships), libclang for bindgen, a C compiler.
+# Embree (3 or 4, whichever the distribution ships), libclang for bindgen, a C compiler,
+# python3 (the MSRV check and the Slurm test read JSON with it).
 # Idempotent and non-interactive; needs root or sudo for apt-get.
 set -euo pipefail
-PKGS=(libembree-dev libclang-dev clang pkg-config build-essential)
+PKGS=(libembree-dev libclang-dev clang pkg-config build-essential python3)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

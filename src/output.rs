@@ -11,7 +11,7 @@
 //!   file is removed and the target is left as it was.
 //!
 //! Every writer of the crate and of the CLI goes through [`write_bytes`],
-//! [`write_with`] or [`write_via_path`].
+//! [`write_with`], [`write_via_path`] or [`AtomicOutput`].
 
 use crate::error::{Error, Result};
 use std::fs::{File, OpenOptions};
@@ -66,31 +66,26 @@ pub fn check_target(path: &Path) -> Result<()> {
     }
 }
 
-/// Creates a fresh temporary file beside `path` (exclusively).
-fn create_temp(path: &Path) -> Result<(PathBuf, File)> {
+/// Creates something new beside `path`, under the first free name of
+/// `.{file name}.{kind}-{pid}-{n}`: `create` must fail with `AlreadyExists`
+/// when the name is taken (`create_new`, `mkdir`), so nothing that exists,
+/// or a link planted at that name, is ever opened.
+fn create_beside<T>(
+    path: &Path,
+    kind: &str,
+    create: impl Fn(&Path) -> std::io::Result<T>,
+) -> Result<(PathBuf, T)> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
     let parent = parent_of(path);
-    let ext = path
-        .extension()
-        .map(|e| format!(".{}", e.to_string_lossy()))
-        .unwrap_or_default();
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.subsec_nanos());
     for _ in 0..64 {
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        // The target's extension stays last: encoders that pick a format
-        // from the path (plotters' PNG, exr) must see the real one.
-        let tmp = parent.join(format!(
-            ".{name}.tmp-{}-{n}-{nanos:x}{ext}",
-            std::process::id()
-        ));
-        match OpenOptions::new().write(true).create_new(true).open(&tmp) {
-            Ok(f) => return Ok((tmp, f)),
+        let candidate = parent.join(format!(".{name}.{kind}-{}-{n}", std::process::id()));
+        match create(&candidate) {
+            Ok(made) => return Ok((candidate, made)),
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
             Err(e) => return Err(io_err(path, e)),
         }
@@ -98,15 +93,32 @@ fn create_temp(path: &Path) -> Result<(PathBuf, File)> {
     Err(invalid(path, "cannot create a temporary file beside it"))
 }
 
-/// Syncs and renames `tmp` over `path`, or removes it on failure.
-fn finish(path: &Path, tmp: &Path, written: std::io::Result<()>) -> Result<()> {
-    let done = written
-        .and_then(|()| File::open(tmp)?.sync_all())
-        .and_then(|()| {
-            // The target may have been replaced meanwhile: check again.
-            check_target(path).map_err(|e| std::io::Error::other(e.to_string()))?;
-            std::fs::rename(tmp, path)
-        });
+/// Creates a fresh temporary file beside `path` (exclusively).
+fn create_temp(path: &Path) -> Result<(PathBuf, File)> {
+    create_beside(path, "tmp", |p| {
+        OpenOptions::new().write(true).create_new(true).open(p)
+    })
+}
+
+/// Creates a fresh folder beside `path` that only we can enter.
+fn create_private_dir(path: &Path) -> Result<PathBuf> {
+    let (dir, ()) = create_beside(path, "tmpdir", |p| {
+        let mut builder = std::fs::DirBuilder::new();
+        #[cfg(unix)]
+        std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
+        builder.create(p)
+    })?;
+    Ok(dir)
+}
+
+/// Renames `tmp` (written and synced: `synced`) over `path`, or removes it
+/// on failure.
+fn finish(path: &Path, tmp: &Path, synced: std::io::Result<()>) -> Result<()> {
+    let done = synced.and_then(|()| {
+        // The target may have been replaced meanwhile: check again.
+        check_target(path).map_err(|e| std::io::Error::other(e.to_string()))?;
+        std::fs::rename(tmp, path)
+    });
     if let Err(e) = done {
         let _ = std::fs::remove_file(tmp);
         return Err(io_err(path, e));
@@ -135,12 +147,67 @@ pub fn write_with(
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<()> {
     let path = path.as_ref();
-    check_target(path)?;
-    let (tmp, file) = create_temp(path)?;
-    let mut w = BufWriter::new(file);
+    let mut out = AtomicOutput::create(path)?;
+    let mut w = BufWriter::new(out.file());
     let written = write(&mut w).and_then(|()| w.flush());
     drop(w);
-    finish(path, &tmp, written)
+    // On failure `out` is dropped unfinished: its temporary is removed.
+    written.map_err(|e| io_err(path, e))?;
+    out.finish()
+}
+
+/// An output file written in pieces under a temporary name beside its
+/// target (for writers that stream, such as the photon files): created with
+/// [`check_target`]'s checks and `create_new`, renamed over the target by
+/// [`AtomicOutput::finish`] as [`write_bytes`] does; dropped unfinished, the
+/// temporary is removed and the target left as it was.
+#[derive(Debug)]
+pub struct AtomicOutput {
+    path: PathBuf,
+    tmp: PathBuf,
+    file: Option<File>,
+}
+
+impl AtomicOutput {
+    /// Creates the temporary beside `path`.
+    ///
+    /// # Errors
+    /// As [`check_target`], or when the folder is not writable.
+    pub fn create(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        check_target(path)?;
+        let (tmp, file) = create_temp(path)?;
+        Ok(AtomicOutput {
+            path: path.to_path_buf(),
+            tmp,
+            file: Some(file),
+        })
+    }
+
+    /// The open temporary file.
+    pub fn file(&mut self) -> &mut File {
+        self.file.as_mut().expect("open until finished")
+    }
+
+    /// Syncs the temporary and renames it over the target.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when syncing or renaming fails (the temporary is removed).
+    pub fn finish(mut self) -> Result<()> {
+        let synced = self.file().sync_all();
+        self.file.take();
+        let tmp = std::mem::take(&mut self.tmp);
+        finish(&self.path, &tmp, synced)
+    }
+}
+
+impl Drop for AtomicOutput {
+    fn drop(&mut self) {
+        if !self.tmp.as_os_str().is_empty() {
+            self.file.take();
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
 }
 
 /// Writes to `path` atomically through `write`, given the path of a fresh
@@ -159,33 +226,11 @@ pub fn write_via_path(
     check_target(path)?;
     let dir = create_private_dir(path)?;
     let inner = dir.join(path.file_name().unwrap_or_else(|| "out".as_ref()));
-    let written = write(&inner);
-    let done = finish(path, &inner, written);
+    // Reopened by name to sync: safe inside the private folder.
+    let synced = write(&inner).and_then(|()| File::open(&inner)?.sync_all());
+    let done = finish(path, &inner, synced);
     let _ = std::fs::remove_dir(&dir);
     done
-}
-
-/// Creates a fresh folder beside `path` that only we can enter.
-fn create_private_dir(path: &Path) -> Result<PathBuf> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let parent = parent_of(path);
-    for _ in 0..64 {
-        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let dir = parent.join(format!(".{name}.tmpdir-{}-{n}", std::process::id()));
-        let mut builder = std::fs::DirBuilder::new();
-        #[cfg(unix)]
-        std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
-        match builder.create(&dir) {
-            Ok(()) => return Ok(dir),
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
-            Err(e) => return Err(io_err(path, e)),
-        }
-    }
-    Err(invalid(path, "cannot create a temporary folder beside it"))
 }
 
 /// Checks, before a long run, that `path` will be writable: [`check_target`],

@@ -4,9 +4,9 @@
 
 use super::frame::{ByteHash, MapHash};
 use super::header::{Header, DEPTHS, FLAG_BUDGET_BOUND, FLAG_MERGED, TRAILER_MAGIC};
-use super::output::AtomicOutput;
 use super::reader::{photons_of, PhotonReader};
 use crate::error::{Error, Result};
+use crate::output::AtomicOutput;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 

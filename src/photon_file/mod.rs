@@ -18,10 +18,10 @@
 mod frame;
 mod header;
 mod merge;
-mod output;
 mod reader;
 mod writer;
 
+pub use crate::output::AtomicOutput;
 pub use frame::{
     canonical_frame, photons_checksum, scene_hash, settings_hash, ByteHash, CanonicalFrame, MapHash,
 };
@@ -30,7 +30,6 @@ pub use header::{
     VERSION,
 };
 pub use merge::{merge, MergeSummary};
-pub use output::AtomicOutput;
 pub use reader::{read_map, read_render_maps, PhotonReader};
 pub use writer::{write_photons, ShardInfo};
 

@@ -2,9 +2,9 @@
 
 use super::frame::{ByteHash, CanonicalFrame, MapHash};
 use super::header::{Header, Settings, DEPTHS, FLAG_BUDGET_BOUND, TRAILER_MAGIC};
-use super::output::AtomicOutput;
 use crate::engine::{Mode, Shard, TraceConfig};
 use crate::error::{Error, Result};
+use crate::output::AtomicOutput;
 use crate::photon_map::CompactPhoton;
 use std::io::Write;
 use std::path::Path;
