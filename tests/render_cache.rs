@@ -8,20 +8,25 @@ use adaptive_pm::render::{
     cache::MAX_STRIDE, default_max_radius, floor_points, irradiance_estimate, render, CacheConfig,
     IrradianceCache, Lookup, RenderConfig, View,
 };
-use adaptive_pm::scene::{PreparedScene, Scene};
+use adaptive_pm::photon_map::{PhotonMap, PhotonRecord};
+use adaptive_pm::rng::Rng;
+use adaptive_pm::scene::{triangle_area, PreparedScene, Scene};
+use glam::Vec3;
 use adaptive_pm::Error;
 use serde_json::Value;
 use std::process::Command;
 
 /// On the Cornell floor (points kept 10 % away from the walls, none under the
-/// blocks), the cache's
-/// irradiance equals the k-nearest estimate at the query point within the
-/// cache's interpolation error. A cell (side `h = 0.87 r`) averages the
-/// estimates of its samples, each at most `h sqrt(3)` from the query; their
-/// kernels share most of their photons with the query's, so the difference is
-/// the change of the irradiance over a fraction of a kernel radius plus part
-/// of the k-NN noise (`1/sqrt(k)` = 10 %). Stated bound: 12 % RMS over the
-/// points, 2 % on the mean (the shift has no preferred direction).
+/// blocks), the cache's irradiance equals the k-nearest estimate at the query
+/// point within the cache's interpolation error. A cell (side `h = 0.87 r`)
+/// holds an estimate at one of its samples, at most `h sqrt(3)` from the
+/// query, from the 7/8 of the photons that are not samples. The cone
+/// estimate's relative variance for a uniform density is `1 / (2 (k - 1))`
+/// from the weights plus `1 / (k - 2)` from the radius, `sigma = 12.3 %` at
+/// k = 100; two such estimates differ by at most `sigma sqrt(2)` = 17.4 % RMS
+/// when they share no photon (they share some), plus the change of the
+/// irradiance over a fraction of a kernel radius. Stated bound: 18 % RMS
+/// over the points, 2 % on the mean (the shift has no preferred direction).
 #[test]
 fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
     let scene = Scene::cornell().unwrap();
@@ -75,8 +80,74 @@ fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
     let rms = (se / n as f64).sqrt();
     let mean = sum_c / sum_k - 1.0;
     eprintln!("cache vs k-NN on {n} floor points: RMS {rms:.4}, mean {mean:+.4}");
-    assert!(rms < 0.12, "RMS relative difference {rms}");
+    assert!(rms < 0.18, "RMS relative difference {rms}");
     assert!(mean.abs() < 0.02, "mean relative difference {mean}");
+}
+
+/// Photons spread evenly over the Cornell floor, each of power 1: the exact
+/// irradiance is `N / area`, and the cache, read at points over the floor's
+/// middle, must give it within 0.5 % (the noise of the mean over ~8000
+/// cells of 12 % each is ~0.15 %). Its two former biases fail this by far:
+/// an estimate at a sample that counted the sample's own photon read
+/// `(k + 1) / (k - 2)` = +3 %, and one that left it out but counted the other
+/// samples read -1.5 % (a cell kept for its samples has, per cell, fewer of
+/// them near its point than an independent point sees).
+#[test]
+fn cache_is_unbiased_on_a_uniform_density() {
+    let scene = Scene::cornell().unwrap();
+    let device = Device::new().unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
+    let floor: Vec<[Vec3; 3]> = scene
+        .meshes()
+        .iter()
+        .filter(|m| m.name.starts_with("floor"))
+        .flat_map(|m| (0..m.indices.len()).map(|i| m.triangle(i)))
+        .collect();
+    let areas: Vec<f32> = floor.iter().map(|&t| triangle_area(t)).collect();
+    let area: f32 = areas.iter().sum();
+    let n = 400_000;
+    let mut rng = Rng::new(7);
+    let records: Vec<PhotonRecord> = (0..n)
+        .map(|_| {
+            let mut pick = rng.next_f32() * area;
+            let t = areas
+                .iter()
+                .position(|&a| {
+                    pick -= a;
+                    pick < 0.0
+                })
+                .unwrap_or(floor.len() - 1);
+            let [u, v] = rng.next_2d();
+            let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+            let [a, b, c] = floor[t];
+            PhotonRecord {
+                position: a + (b - a) * u + (c - a) * v,
+                power: Vec3::ONE,
+                direction: -Vec3::Y,
+                depth: 0,
+            }
+        })
+        .collect();
+    let map = PhotonMap::build(&records);
+    let lookup = Lookup {
+        k: 100,
+        max_radius: default_max_radius(&scene),
+    };
+    let (lo, hi) = scene.bounds();
+    let cache_cfg = CacheConfig { stride: 8, lookup };
+    let cache = IrradianceCache::build(&map, &rt, (hi - lo).length(), &cache_cfg).unwrap();
+    let exact = n as f64 / area as f64;
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for p in floor_points(&scene, "floor", 100, 100, 0.15) {
+        for _ in 0..8 {
+            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            sum += cache.irradiance(p.position, Vec3::Y, u).unwrap().x as f64;
+            count += 1;
+        }
+    }
+    let mean = sum / count as f64 / exact - 1.0;
+    eprintln!("cache / exact irradiance - 1 = {mean:+.4} over {count} lookups");
+    assert!(mean.abs() < 0.005, "cache mean off by {mean:+.4}");
 }
 
 #[test]
@@ -93,6 +164,9 @@ fn bad_values_of_the_new_options_are_clear_errors() {
     c.light_samples = 1;
     c.cache_stride = MAX_STRIDE + 1;
     check(c.clone(), "cache stride");
+    // One sample per photon would leave no photon for the estimates.
+    c.cache_stride = 1;
+    check(c.clone(), "cache stride");
     c.cache_stride = 8;
     c.final_gather = 1 << 20;
     check(c.clone(), "final gather");
@@ -104,10 +178,13 @@ fn bad_values_of_the_new_options_are_clear_errors() {
         max_radius: 1.0,
     };
     assert!(CacheConfig { stride: 0, lookup }.validate().is_err());
+    assert!(CacheConfig { stride: 1, lookup }.validate().is_err());
+    assert!(CacheConfig { stride: 2, lookup }.validate().is_ok());
 
     // The CLI says which option and what it accepts.
     for (flag, value, word) in [
         ("--cache-stride", "1000000", "cache stride"),
+        ("--cache-stride", "1", "cache stride"),
         ("--light-samples", "0", "light samples"),
         ("--final-gather", "99999", "final gather"),
     ] {

@@ -44,7 +44,7 @@ pub struct RenderArgs {
     /// Light samples (shadow rays) per camera sample.
     #[arg(long, default_value_t = 1)]
     pub light_samples: u32,
-    /// Photons per irradiance-cache entry (0: the gather reads the k nearest photons).
+    /// Photons per irradiance-cache sample, 2 or more (0: the gather reads the k nearest photons).
     #[arg(long, default_value_t = DEFAULT_STRIDE)]
     pub cache_stride: u32,
     /// Photons per radiance estimate.

@@ -88,6 +88,16 @@ impl CompactPhoton {
         ((self.pos >> (axis as u32 * POSITION_BITS)) & POSITION_MASK) as u32
     }
 
+    /// A hash of what the photon carries (position, power, direction, depth),
+    /// not of where the tree put it (its split axis is left out): the same
+    /// photon gives the same value in any map built from it. Used as a coin
+    /// independent of the photons' layout, to thin a map at random.
+    #[inline]
+    pub fn content_hash(&self) -> u64 {
+        let dir = self.dir & !(3 << AXIS_SHIFT);
+        crate::rng::hash2(self.pos, (u64::from(self.power) << 32) | u64::from(dir))
+    }
+
     /// The kd-tree split axis stored with this photon (meaningful for inner nodes only).
     #[inline(always)]
     pub fn axis(&self) -> usize {

@@ -22,10 +22,11 @@
 //!   defaults, `r` the median k-nearest radius of 1024 spread samples), split
 //!   by the normal's dominant axis and sign (six buckets: a floor and a wall
 //!   meeting in one cube stay apart). A finest cell's value is the estimate
-//!   at its first sample (one k-nearest search per cell, not per sample).
-//!   A cell's value is the mean of its samples' irradiances.
-//! - **Levels**: the same at sides `2h` to `16h` ([`LEVELS`]): where photons
-//!   are sparse, a lookup reads a coarser cell instead of an empty one.
+//!   at its first sample (one k-nearest search per cell, not per sample),
+//!   leaving out that sample's own photon (see [Bias](#bias)).
+//! - **Levels**: cells of sides `2h` to `16h` ([`LEVELS`]) hold the mean of
+//!   the finest cells inside them, each counted once: where photons are
+//!   sparse, a lookup reads a coarser cell instead of an empty one.
 //! - **Storage**: open addressing, half full: each slot is 8 bytes, a 32-bit
 //!   tag of the cell's key and its irradiance in shared-exponent RGB (Ward's
 //!   RGBE, 1/256 of the largest channel): **16 bytes per cached cell**
@@ -48,11 +49,23 @@
 //! and vanishes as the photon count `N` grows; a tag collision (two cells
 //! with one 32-bit tag on one probe chain, odds ~ cells / 2^32 per lookup)
 //! reads a wrong cell.
+//!
+//! Two biases that would *not* vanish with `N` are removed by construction:
+//! - an estimate at a sample counts the other photons only. A k-nearest
+//!   estimate evaluated at one of the map's own photons, that photon
+//!   included, has it at distance 0 with the cone's full weight and reads
+//!   `(k + 1) / (k - 2)` of the density: +3 % at `k = 100` for any `N`
+//!   (the floor the renderer's bias sweep showed before);
+//! - a finest cell holds the estimate at one point, and a coarse cell the
+//!   mean of its finest cells; samples sit where photons are, so a mean over
+//!   them would weight each cell's bright part by its photon count.
+//! What remains in a finest cell is that its one point is a photon, more
+//! likely in its bright part: `|grad E|^2 h^2 / (12 E)`, second order in `h`.
 
 use super::estimate::Lookup;
 use crate::embree::{CommittedScene, Ray};
 use crate::error::{Error, Result};
-use crate::photon_map::{Neighbor, PhotonMap};
+use crate::photon_map::{CompactPhoton, Neighbor, PhotonMap};
 use crate::rng::mix64;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -61,6 +74,9 @@ use std::time::Instant;
 
 /// Default: one irradiance sample per this many photons.
 pub const DEFAULT_STRIDE: u32 = 8;
+/// Fewest photons per sample: estimates count the photons that are not
+/// samples (see [Bias](#bias)), so one in one would leave none.
+pub const MIN_STRIDE: u32 = 2;
 /// Most photons per sample accepted.
 pub const MAX_STRIDE: u32 = 1 << 16;
 /// Photons farther than this fraction of the scene's diagonal from a
@@ -90,11 +106,11 @@ impl CacheConfig {
     /// # Errors
     /// [`Error::InvalidParameter`] naming the bad setting.
     pub fn validate(&self) -> Result<()> {
-        if self.stride == 0 || self.stride > MAX_STRIDE {
+        if !(MIN_STRIDE..=MAX_STRIDE).contains(&self.stride) {
             return Err(Error::param(
                 "cache stride",
                 format!(
-                    "must be in 1..={MAX_STRIDE} photons per cache sample, got {}",
+                    "must be in {MIN_STRIDE}..={MAX_STRIDE} photons per cache sample, got {}",
                     self.stride
                 ),
             ));
@@ -173,26 +189,42 @@ impl IrradianceCache {
     ) -> Result<Self> {
         cfg.validate()?;
         let t = Instant::now();
-        let stride = cfg.stride as usize;
-        let count = full.len().div_ceil(stride);
+        let stride = u64::from(cfg.stride);
         let plane = PLANE_TOLERANCE * diagonal;
         let quant = *full.quantizer();
-        // (position, normal, irradiance, radius) of each sample.
-        // Sample points and their surface normals (one ray each).
-        let samples: Vec<(Vec3, Vec3)> = (0..count)
-            .into_par_iter()
-            .filter_map(|e| {
-                let p = full.photon((e * stride) as u32);
+        // A coin per photon, from its content: heads (one in `stride`) makes
+        // it a sample, tails a photon that estimates count.
+        let is_sample = |c: &CompactPhoton| c.content_hash() % stride == 0;
+        // Sample points, their surface normals (one ray each) and coins.
+        let samples: Vec<(Vec3, Vec3, u64)> = full
+            .compact_photons()
+            .par_iter()
+            .filter(|c| is_sample(c))
+            .filter_map(|c| {
+                let p = quant.decode(c);
                 let n = surface_normal(rt, p.position, p.direction, diagonal)?;
-                Some((p.position, n))
+                Some((p.position, n, c.content_hash()))
             })
             .collect();
-        let estimate = |scratch: &mut Vec<Neighbor>, (x, n): (Vec3, Vec3)| {
+        // Estimates count the photons that are not samples, scaled by
+        // `stride / (stride - 1)`. Which cells exist, and which sample a cell
+        // keeps, depend on the samples; an estimate that counted them would
+        // see fewer of them than an independent point does (a cell kept for
+        // its one sample has, per cell, fewer others than the Poisson mean)
+        // and read low: -3 % at k = 100 without its own photon, +3 % with it,
+        // whatever the photon count (both measured). The other photons are an
+        // independent thinning of the map, so an estimate from them at any
+        // sample is an estimate at an independent point: no bias from the
+        // choice of points.
+        let scale = stride as f32 / (stride - 1) as f32;
+        let estimate = |scratch: &mut Vec<Neighbor>, (x, n, _): (Vec3, Vec3, u64)| {
             full.nearest_k_where(x, cfg.lookup.k, cfg.lookup.max_radius, scratch, |c| {
-                c.direction_unnormalised().dot(n) <= 0.0
+                !is_sample(c)
+                    && c.direction_unnormalised().dot(n) <= 0.0
                     && (quant.position(c) - x).dot(n).abs() <= plane
             });
-            cone_irradiance(full, scratch, cfg.lookup)
+            let (e, r) = cone_irradiance(full, scratch, cfg.lookup);
+            (e * scale, r)
         };
         // The cell side from the median radius of a spread subset of samples.
         let probe_step = (samples.len() / 1024).max(1);
@@ -229,7 +261,7 @@ impl IrradianceCache {
         };
         // Finest cells: one k-nearest estimate each, at its first sample
         // (keys sorted with the sample index: a fixed choice whatever the
-        // thread count). Every sample then carries its cell's value.
+        // thread count).
         let mut fine: Vec<(u64, u32)> = samples
             .iter()
             .enumerate()
@@ -241,23 +273,20 @@ impl IrradianceCache {
             .par_iter()
             .map_init(
                 || Vec::with_capacity(cfg.lookup.k),
-                |sc, g| estimate(sc, samples[g[0].1 as usize]).0,
+                |sc, g| estimate(sc, samples[Self::pick(&samples, g) as usize]).0,
             )
             .collect();
-        let mut value = vec![Vec3::ZERO; samples.len()];
-        for (g, v) in groups.iter().zip(&values) {
-            for &(_, i) in g.iter() {
-                value[i as usize] = *v;
-            }
-        }
-        // Coarser cells: the mean over their samples.
+        // Coarser cells: the mean over the finest cells they hold, each counted
+        // once. A mean over samples would weight a cell's bright part by its
+        // extra photons (a mean of E weighted by E: too bright by Var E / E).
         let mut keyed: Vec<(u64, u32)> = (1..LEVELS)
             .flat_map(|level| {
                 let cache = &cache;
-                samples
-                    .iter()
-                    .enumerate()
-                    .map(move |(i, s)| (cache.key(s.0, s.1, level), i as u32))
+                let samples = &samples;
+                groups.iter().enumerate().map(move |(gi, g)| {
+                    let s = samples[g[0].1 as usize];
+                    (cache.key(s.0, s.1, level), gi as u32)
+                })
             })
             .collect();
         keyed.par_sort_unstable();
@@ -270,7 +299,7 @@ impl IrradianceCache {
             cache.insert(g[0].0, to_rgbe(*v));
         }
         for group in keyed.chunk_by(|a, b| a.0 == b.0) {
-            let sum: Vec3 = group.iter().map(|&(_, i)| value[i as usize]).sum();
+            let sum: Vec3 = group.iter().map(|&(_, gi)| values[gi as usize]).sum();
             cache.insert(group[0].0, to_rgbe(sum / group.len() as f32));
         }
         cache.build_s = t.elapsed().as_secs_f64();
@@ -284,6 +313,16 @@ impl IrradianceCache {
         let c = |v: f32| (v.clamp(-1e15, 1e15) as i64 as u64) & 0x7_FFFF;
         let meta = bucket(n) | ((level as u64) << 3);
         mix64(c(g.x) | (c(g.y) << 19) | (c(g.z) << 38) | (meta << 57))
+    }
+
+    /// The sample whose estimate a finest cell holds: the one of `group`
+    /// with the least coin hash, a choice that depends on the samples alone.
+    fn pick(samples: &[(Vec3, Vec3, u64)], group: &[(u64, u32)]) -> u32 {
+        group
+            .iter()
+            .map(|&(_, i)| i)
+            .min_by_key(|&i| samples[i as usize].2)
+            .unwrap_or(group[0].1)
     }
 
     /// First slot of `key`'s probe chain (multiply-shift onto the table).

@@ -224,11 +224,12 @@ impl RenderConfig {
                 ),
             ));
         }
-        if self.cache_stride > cache::MAX_STRIDE {
+        if self.cache_stride == 1 || self.cache_stride > cache::MAX_STRIDE {
             return Err(Error::param(
                 "cache stride",
                 format!(
-                    "must be 0 (no cache) or in 1..={} photons per cache entry, got {}",
+                    "must be 0 (no cache) or in {}..={} photons per cache entry, got {}",
+                    cache::MIN_STRIDE,
                     cache::MAX_STRIDE,
                     self.cache_stride
                 ),
