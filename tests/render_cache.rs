@@ -4,15 +4,15 @@
 
 use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Budget, Maps, Mode, TraceConfig, Tracer};
+use adaptive_pm::photon_map::{PhotonMap, PhotonRecord};
 use adaptive_pm::render::{
     cache::MAX_STRIDE, default_max_radius, floor_points, irradiance_estimate, render, CacheConfig,
     IrradianceCache, Lookup, RenderConfig, View,
 };
-use adaptive_pm::photon_map::{PhotonMap, PhotonRecord};
 use adaptive_pm::rng::Rng;
 use adaptive_pm::scene::{triangle_area, PreparedScene, Scene};
-use glam::Vec3;
 use adaptive_pm::Error;
+use glam::Vec3;
 use serde_json::Value;
 use std::process::Command;
 
@@ -118,7 +118,11 @@ fn cache_is_unbiased_on_a_uniform_density() {
                 })
                 .unwrap_or(floor.len() - 1);
             let [u, v] = rng.next_2d();
-            let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+            let (u, v) = if u + v > 1.0 {
+                (1.0 - u, 1.0 - v)
+            } else {
+                (u, v)
+            };
             let [a, b, c] = floor[t];
             PhotonRecord {
                 position: a + (b - a) * u + (c - a) * v,
