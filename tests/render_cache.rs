@@ -259,3 +259,41 @@ fn gather_through_the_cache_keeps_the_mean() {
     let rel = ((a - b).abs() / b).max_element();
     assert!(rel < 0.02, "{a} vs {b}");
 }
+
+/// Maps built full-only (what the default render reads) are refused, with a
+/// clear error, by settings that read the primary or indirect map; the
+/// default settings render from them the same image as from all three maps.
+#[test]
+fn full_only_maps_serve_the_default_render_and_refuse_the_others() {
+    let scene = Scene::cornell().unwrap();
+    let device = Device::new().unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
+    let cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(20_000));
+    let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
+    let out = tracer.trace(&cfg).unwrap();
+    let all = Maps::from_photons(out.photons.clone(), out.frame);
+    let full = Maps::from_photons(out.photons, out.frame);
+    let full = Maps::full_only(full.full.compact_photons().to_vec(), out.frame);
+    assert!(full.is_full_only() && !all.is_full_only());
+    let mut rc = RenderConfig::new(12, 12);
+    rc.spp = 2;
+    assert!(!rc.reads_split_maps());
+    let a = render(&scene, &rt, Some(&all), &rc, &|_, _| {}).unwrap();
+    let b = render(&scene, &rt, Some(&full), &rc, &|_, _| {}).unwrap();
+    assert_eq!(a.pixels, b.pixels);
+    for view in [View::Map { primary_only: true }, View::Full] {
+        let mut c = rc.clone();
+        c.view = view;
+        c.final_gather = 0;
+        assert!(c.reads_split_maps());
+        match render(&scene, &rt, Some(&full), &c, &|_, _| {}) {
+            Err(Error::InvalidParameter { name, reason }) => {
+                assert!(
+                    name.contains("photon map") && reason.contains("full-only"),
+                    "{reason}"
+                );
+            }
+            other => panic!("{view:?}: {:?}", other.map(|_| ())),
+        }
+    }
+}

@@ -132,8 +132,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 bar.set_message(format!("depth {}", p.depth));
             })
         })?;
-        let maps = pool.install(|| RenderMaps::build(&out.records()));
-        (Some(maps), t.elapsed().as_secs_f64(), out.photons.len())
+        let stored = out.photons.len();
+        let maps = pool.install(|| {
+            if cfg.reads_split_maps() {
+                RenderMaps::from_photons(out.photons, out.frame)
+            } else {
+                RenderMaps::full_only(out.photons, out.frame)
+            }
+        });
+        (Some(maps), t.elapsed().as_secs_f64(), stored)
     };
     bar.set_position(0);
     bar.set_length(args.height as u64);

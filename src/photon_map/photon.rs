@@ -94,8 +94,12 @@ impl CompactPhoton {
     /// independent of the photons' layout, to thin a map at random.
     #[inline]
     pub fn content_hash(&self) -> u64 {
+        // One mixing round: a coin per photon, read for every candidate of
+        // every cache estimate, need not be a keyed hash.
         let dir = self.dir & !(3 << AXIS_SHIFT);
-        crate::rng::hash2(self.pos, (u64::from(self.power) << 32) | u64::from(dir))
+        crate::rng::mix64(
+            self.pos ^ ((u64::from(self.power) << 32) | u64::from(dir)).rotate_left(23),
+        )
     }
 
     /// The kd-tree split axis stored with this photon (meaningful for inner nodes only).

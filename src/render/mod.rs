@@ -197,6 +197,18 @@ impl RenderConfig {
         }
     }
 
+    /// True when these settings read the primary or the indirect map (the
+    /// primary-only map view, or indirect light from the k nearest photons
+    /// without a gather); else the full map is all the render reads, and
+    /// [`Maps::full_only`](crate::engine::Maps::full_only) is enough.
+    pub fn reads_split_maps(&self) -> bool {
+        match self.view {
+            View::Map { primary_only } => primary_only,
+            View::Full => self.final_gather == 0,
+            View::DirectOnly => false,
+        }
+    }
+
     /// Checks the settings, including that the image fits in memory.
     ///
     /// # Errors

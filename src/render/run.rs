@@ -74,6 +74,13 @@ pub fn render_with(
             "this view reads the photon map; pass one or use the direct-only view",
         ));
     }
+    if cfg.reads_split_maps() && maps.is_some_and(|m| m.is_full_only()) {
+        return Err(Error::param(
+            "photon map",
+            "these settings read the primary or indirect map, but the maps were built \
+             full-only (Maps::full_only); build them with Maps::from_photons",
+        ));
+    }
     // A tile (`cfg.rows`) is an image of its rows only; pixels keep their
     // whole-image index, so their samples are the whole image's.
     let (y0, y1) = cfg.rows.unwrap_or((0, cfg.height));

@@ -113,8 +113,12 @@ fn noise_free(e: f64, noise: f64) -> f64 {
     (e * e - noise * noise).max(0.0).sqrt()
 }
 
-/// Runs the benchmark on `scene` on the current rayon pool; `log` gets one
-/// line per step.
+/// Bisection steps after the doubling search brackets the target spp.
+pub const REFINE: u32 = 3;
+
+/// Runs the benchmark on `scene` on the current rayon pool: the reference,
+/// the path tracer's timed render, then for each budget the photon render at
+/// rising spp until it reaches the target; `log` gets one line per step.
 ///
 /// # Errors
 /// Bad settings or a failed trace.
@@ -167,17 +171,20 @@ pub fn run_study(
     ));
 
     let mut rows = Vec::new();
-    let mut best: Option<f64> = None;
     for &n_max in &cfg.n_max {
         let mut tc = TraceConfig::new(cfg.mode, Budget::NMax(n_max));
         tc.seed = cfg.seed;
         let t = Instant::now();
         let out = Tracer::new(PreparedScene::new(scene.clone(), rt)?).trace(&tc)?;
         let trace_s = t.elapsed().as_secs_f64();
-        let maps = RenderMaps::build(&out.records());
+        let stored = out.photons.len();
+        let maps = if base.reads_split_maps() {
+            RenderMaps::from_photons(out.photons, out.frame)
+        } else {
+            RenderMaps::full_only(out.photons, out.frame)
+        };
         let maps_s = maps.build_total_s();
-        let mut spp = cfg.fixed_spp.unwrap_or(8);
-        while spp <= cfg.max_spp.max(cfg.fixed_spp.unwrap_or(0)) {
+        let measure = |spp: u32, rows: &mut Vec<PhotonRow>| -> Result<bool> {
             let mut c = base.clone();
             c.spp = spp;
             let t = Instant::now();
@@ -185,7 +192,7 @@ pub fn run_study(
             let render_s = t.elapsed().as_secs_f64();
             let row = photon_row(&img, &reference, &keep, reference_noise, n_max, spp)?;
             let row = PhotonRow {
-                photons: out.photons.len(),
+                photons: stored,
                 trace_s,
                 maps_s,
                 render_s,
@@ -203,16 +210,46 @@ pub fn run_study(
                 100.0 * row.bias[2]
             ));
             let reached = row.rel_rmse <= cfg.target;
-            if reached {
-                best = Some(best.map_or(row.total_s, |b: f64| b.min(row.total_s)));
-            }
             rows.push(row);
-            if reached || cfg.fixed_spp.is_some() {
+            Ok(reached)
+        };
+        if let Some(spp) = cfg.fixed_spp {
+            measure(spp, &mut rows)?;
+            continue;
+        }
+        // Doubling until the target is reached, then bisection between the
+        // last miss and the first hit (REFINE steps): the spp that reaches the
+        // target is measured to within 1/2^REFINE of the bracket, not
+        // rounded up to a power of two.
+        let (mut miss, mut spp) = (0, 8);
+        let mut hit = None;
+        while spp <= cfg.max_spp {
+            if measure(spp, &mut rows)? {
+                hit = Some(spp);
                 break;
             }
+            miss = spp;
             spp *= 2;
         }
+        if let Some(mut hi) = hit {
+            for _ in 0..REFINE {
+                let mid = (miss + hi) / 2;
+                if mid <= miss || mid >= hi {
+                    break;
+                }
+                if measure(mid, &mut rows)? {
+                    hi = mid;
+                } else {
+                    miss = mid;
+                }
+            }
+        }
     }
+    let best = rows
+        .iter()
+        .filter(|r| r.rel_rmse <= cfg.target)
+        .map(|r| r.total_s)
+        .min_by(f64::total_cmp);
     Ok(StudyResult {
         reference_noise,
         reference_s,

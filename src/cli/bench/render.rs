@@ -43,6 +43,9 @@ pub struct RenderBenchArgs {
     /// Also measure direct light alone at this spp.
     #[arg(long)]
     pub direct_spp: Option<u32>,
+    /// Light samples (shadow rays) per camera sample of the photon render.
+    #[arg(long, default_value_t = RenderConfig::new(1, 1).light_samples)]
+    pub light_samples: u32,
     /// Seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -60,6 +63,9 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
     let device = Device::new()?;
     let rt = scene.embree_geometry(&device)?;
     let pool = args.threads.pool()?;
+    let mut render = RenderConfig::new(args.size, args.size);
+    render.light_samples = args.light_samples;
+    render.validate()?;
     let cfg = StudyConfig {
         size: args.size,
         reference_spp: args.reference_spp,
@@ -68,7 +74,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
         max_spp: args.max_spp,
         target: args.target,
         mode: Mode::Adaptive,
-        render: RenderConfig::new(args.size, args.size),
+        render,
         seed: args.seed,
         fixed_spp: args.fixed_spp,
     };
@@ -84,6 +90,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
         serde_json::to_string_pretty(&json!({
             "scene": args.scene, "cosn": args.cosn, "size": args.size,
             "threads": pool.current_num_threads(), "loadavg": load.trim(),
+            "light_samples": args.light_samples,
             "result": result, "direct": direct,
         }))?
     );
