@@ -5,15 +5,16 @@
 //! PhotonGI and pbrt-v4's SPPM hash their visible points).
 //!
 //! # Build
-//! - **Samples**: every `stride`-th photon of the full map in its kd-tree
-//!   order (a leaf's few photons sit together, so this thins the photons
-//!   evenly in space while following their density).
+//! - **Samples**: the photons whose coin ([`CompactPhoton::content_hash`],
+//!   a hash of what the photon carries) comes up one in `stride`: a random
+//!   thinning that follows the photons' density.
 //! - **Normal**: photons do not store one; a ray cast along the photon's own
 //!   direction of travel, from just before its position, finds the surface
 //!   it landed on (one ray per sample; a sample whose surface is not found is
 //!   dropped).
-//! - **Irradiance** at a point: the `k`-nearest estimate of the full map (all
-//!   depths: the light leaving a gather hit includes its direct light) with
+//! - **Irradiance** at a point: the `k`-nearest estimate of the full map's
+//!   photons that are *not* samples, times `stride / (stride - 1)` (all
+//!   depths: the light leaving a gather hit includes its direct light), with
 //!   Jensen's cone filter, counting only photons that arrived on the sample's
 //!   side *and* lie in its tangent plane (within [`PLANE_TOLERANCE`] of the
 //!   scene's diagonal), so a wall's photons do not leak onto the floor.
@@ -22,8 +23,8 @@
 //!   defaults, `r` the median k-nearest radius of 1024 spread samples), split
 //!   by the normal's dominant axis and sign (six buckets: a floor and a wall
 //!   meeting in one cube stay apart). A finest cell's value is the estimate
-//!   at its first sample (one k-nearest search per cell, not per sample),
-//!   leaving out that sample's own photon (see [Bias](#bias)).
+//!   at one of its samples, the one with the least coin (one k-nearest
+//!   search per cell, not per sample).
 //! - **Levels**: cells of sides `2h` to `16h` ([`LEVELS`]) hold the mean of
 //!   the finest cells inside them, each counted once: where photons are
 //!   sparse, a lookup reads a coarser cell instead of an empty one.
@@ -50,15 +51,20 @@
 //! with one 32-bit tag on one probe chain, odds ~ cells / 2^32 per lookup)
 //! reads a wrong cell.
 //!
-//! Two biases that would *not* vanish with `N` are removed by construction:
-//! - an estimate at a sample counts the other photons only. A k-nearest
-//!   estimate evaluated at one of the map's own photons, that photon
-//!   included, has it at distance 0 with the cone's full weight and reads
-//!   `(k + 1) / (k - 2)` of the density: +3 % at `k = 100` for any `N`
-//!   (the floor the renderer's bias sweep showed before);
-//! - a finest cell holds the estimate at one point, and a coarse cell the
-//!   mean of its finest cells; samples sit where photons are, so a mean over
-//!   them would weight each cell's bright part by its photon count.
+//! Three biases that would *not* vanish with `N` are removed by construction
+//! (each measured before its fix, on the Cornell box at k = 100):
+//! - an estimate at a sample that counted the sample's own photon would
+//!   have it at distance 0 with the cone's full weight, and read
+//!   `(k + 1) / (k - 2)` of the density: +3 % for any `N`;
+//! - one that left only that photon out would still count the cell's other
+//!   samples, and a cell exists *because* it holds samples: per cell, fewer
+//!   other samples lie near its point than near an independent point, and
+//!   the estimate read -1.5 %. Estimates therefore count only the photons
+//!   that are not samples: an independent thinning of the map, which knows
+//!   nothing of which cells exist or which sample each keeps;
+//! - a coarse cell holds the mean of its finest cells, each counted once; a
+//!   mean over samples would weight its bright part by its photon count.
+//!
 //! What remains in a finest cell is that its one point is a photon, more
 //! likely in its bright part: `|grad E|^2 h^2 / (12 E)`, second order in `h`.
 
