@@ -18,7 +18,7 @@ use std::process::Command;
 
 /// On the Cornell floor (points kept 10 % away from the walls, none under the
 /// blocks), the cache's irradiance equals the k-nearest estimate at the query
-/// point within the cache's interpolation error. A cell (side `h = 0.87 r`)
+/// point within the cache's interpolation error. A cell (side `h = 1.0 r`)
 /// holds an estimate at one of its samples, at most `h sqrt(3)` from the
 /// query, from the 7/8 of the photons that are not samples. The cone
 /// estimate's relative variance for a uniform density is `1 / (2 (k - 1))`

@@ -18,8 +18,8 @@
 //!   Jensen's cone filter, counting only photons that arrived on the sample's
 //!   side *and* lie in its tangent plane (within [`PLANE_TOLERANCE`] of the
 //!   scene's diagonal), so a wall's photons do not leak onto the floor.
-//! - **Cells**: cubes of side `h = r sqrt(3 pi stride / k)` ([`SAMPLES_PER_CELL`]
-//!   = 3 samples where the density is the median one; `h = 0.87 r` at the
+//! - **Cells**: cubes of side `h = r sqrt(4 pi stride / k)` ([`SAMPLES_PER_CELL`]
+//!   = 4 samples where the density is the median one; `h = 1.0 r` at the
 //!   defaults, `r` the median k-nearest radius of 1024 spread samples), split
 //!   by the normal's dominant axis and sign (six buckets: a floor and a wall
 //!   meeting in one cube stay apart). A finest cell's value is the estimate
@@ -45,7 +45,7 @@
 //! # Bias
 //! On top of the k-nearest estimate's own bias (blur over its radius `r`,
 //! and the boundary bias of a disc that runs past a surface's edge), the
-//! cells blur by a tent of width `2h = 1.7 r` at the defaults, and a cell cut by
+//! cells blur by a tent of width `2h = 2 r` at the defaults, and a cell cut by
 //! an edge reads the mean of its part. All of it scales with `r ~ sqrt(k / N)`
 //! and vanishes as the photon count `N` grows; a tag collision (two cells
 //! with one 32-bit tag on one probe chain, odds ~ cells / 2^32 per lookup)
@@ -91,7 +91,10 @@ pub const PLANE_TOLERANCE: f32 = 1e-3;
 /// Samples expected in a cell where the photon density is the median one:
 /// sets the cell side `h = r sqrt(SAMPLES_PER_CELL pi stride / k)` (`r` the
 /// median k-nearest radius), so that few cells a surface crosses are empty.
-pub const SAMPLES_PER_CELL: f32 = 3.0;
+/// 4 rather than 3: a quarter fewer k-nearest searches (the build's whole
+/// cost) for the same mean bias at 1e6 photons and up and the same image
+/// error (measured with `bench render --fixed-spp 64` at 1e5, 1e6, 1e7).
+pub const SAMPLES_PER_CELL: f32 = 4.0;
 /// Levels of cells (side `h`, `2h`, ... `16h`): a lookup reads the finest level
 /// whose cell holds samples, so where photons are sparse it reads a coarser
 /// cell instead of falling back to the k-nearest search.
