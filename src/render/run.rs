@@ -139,12 +139,7 @@ pub fn render_with(
         .enumerate()
         .for_each(|(y, row)| {
             let y = y + y0 as usize;
-            let mut sc = Scratch {
-                neighbors: Vec::with_capacity(cfg.k),
-                lookup_ns: 0,
-                hits: 0,
-                misses: 0,
-            };
+            let mut sc = Scratch::new(cfg.k);
             for (x, px) in row.iter_mut().enumerate() {
                 let pixel = (y * width + x) as u64;
                 let key = hash2(cfg.seed, pixel);
