@@ -27,21 +27,33 @@ pub mod dim {
     pub const GATHER: u32 = 2;
 }
 
+/// Pairs whose hashes a sampler computes once, not per point: the
+/// renderer's three ([`dim`]).
+const CACHED_PAIRS: usize = 3;
+
 /// The stratified points of one pixel.
 #[derive(Clone, Copy, Debug)]
 pub struct PixelSampler {
     key: u64,
+    /// `hash2(key, pair)` of the pairs below [`CACHED_PAIRS`].
+    hashes: [u64; CACHED_PAIRS],
 }
 
 impl PixelSampler {
     /// The sampler of the pixel whose key is `key` (a hash of seed and pixel).
     pub fn new(key: u64) -> Self {
-        PixelSampler { key }
+        PixelSampler {
+            key,
+            hashes: std::array::from_fn(|d| hash2(key, d as u64)),
+        }
     }
 
     /// Point `i` of `n` (`i < n`) of dimension pair `pair`, in `[0, 1)^2`.
     pub fn get_2d(&self, pair: u32, i: u32, n: u32) -> [f32; 2] {
-        let h = hash2(self.key, pair as u64);
+        let h = match self.hashes.get(pair as usize) {
+            Some(&h) => h,
+            None => hash2(self.key, pair as u64),
+        };
         let index = permute(i, n.max(1), h as u32);
         let (a, b) = sobol02(index);
         let s = mix64(h);
