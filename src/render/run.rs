@@ -22,7 +22,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 pub struct RenderStats {
     /// Camera samples taken.
     pub samples: u64,
-    /// Seconds spent in photon-map and cache lookups, summed over threads.
+    /// Seconds spent in photon-map and cache lookups, summed over threads
+    /// (one lookup in 16 is timed and counted 16 times).
     pub lookup_s: f64,
     /// Lookups answered by the cache.
     pub cache_hits: u64,

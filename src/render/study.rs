@@ -76,7 +76,7 @@ pub struct PhotonRow {
     pub render_s: f64,
     /// Seconds to build the cache.
     pub cache_build_s: f64,
-    /// Seconds in lookups (thread sum).
+    /// Seconds in lookups (thread sum, from one lookup in 16 timed).
     pub lookup_s: f64,
     /// relRMSE against the reference, its noise removed.
     pub rel_rmse: f64,
