@@ -139,6 +139,27 @@ fn furnace_gives_le_over_one_minus_rho_on_every_pixel() {
     }
 }
 
+/// The path tracer's mean over the non-light pixels of a `size`² image at
+/// `spp` (two halves), its standard error, and the mask of those pixels.
+fn path_reference(
+    scene: &Scene,
+    rt: &CommittedScene,
+    size: u32,
+    spp: u32,
+) -> (Vec<bool>, f64, f64) {
+    let mut cfg = RenderConfig::new(size, size);
+    cfg.spp = spp;
+    cfg.show_emitters = false;
+    let keep: Vec<bool> = light_pixels(scene, rt, &cfg)
+        .unwrap()
+        .iter()
+        .map(|l| !l)
+        .collect();
+    let halves = PathHalves::render(scene, rt, &cfg, PathPart::Full).unwrap();
+    let (pa, pb) = (masked_mean(&halves.a, &keep), masked_mean(&halves.b, &keep));
+    (keep, 0.5 * (pa + pb), (pa - pb).abs() / 2.0)
+}
+
 /// Mean over the pixels that are not a light.
 fn masked_mean(img: &adaptive_pm::render::Image, keep: &[bool]) -> f64 {
     let (s, n) = img
@@ -191,18 +212,7 @@ fn photon_and_path_renders_agree_within_the_photon_bias() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
     let rt = scene.embree_geometry(&device).unwrap();
-    let mut cfg = RenderConfig::new(24, 24);
-    cfg.spp = 128;
-    cfg.show_emitters = false;
-    let keep: Vec<bool> = light_pixels(&scene, &rt, &cfg)
-        .unwrap()
-        .iter()
-        .map(|l| !l)
-        .collect();
-    let halves = PathHalves::render(&scene, &rt, &cfg, PathPart::Full).unwrap();
-    let (pa, pb) = (masked_mean(&halves.a, &keep), masked_mean(&halves.b, &keep));
-    let path = 0.5 * (pa + pb);
-    let path_se = (pa - pb).abs() / 2.0;
+    let (keep, path, path_se) = path_reference(&scene, &rt, 24, 128);
     let n = 200_000;
     let big: Vec<f64> = (1..=3)
         .map(|s| photon_mean(&scene, &rt, n, s, &keep))
@@ -238,18 +248,8 @@ fn bias_falls_with_the_photon_count() {
     let scene = Scene::cornell().unwrap();
     let rt = scene.embree_geometry(&device).unwrap();
     let size = 32;
-    let mut cfg = RenderConfig::new(size, size);
-    cfg.spp = 2048;
-    cfg.show_emitters = false;
-    let keep: Vec<bool> = light_pixels(&scene, &rt, &cfg)
-        .unwrap()
-        .iter()
-        .map(|l| !l)
-        .collect();
-    let halves = PathHalves::render(&scene, &rt, &cfg, PathPart::Full).unwrap();
-    let (pa, pb) = (masked_mean(&halves.a, &keep), masked_mean(&halves.b, &keep));
-    let path = 0.5 * (pa + pb);
-    let se = (pa - pb).abs() / 2.0 / path;
+    let (keep, path, path_se) = path_reference(&scene, &rt, size, 2048);
+    let se = path_se / path;
     let bias: Vec<f64> = [10_000, 100_000, 1_000_000]
         .iter()
         .map(|&n| {
