@@ -272,8 +272,7 @@ fn full_only_maps_serve_the_default_render_and_refuse_the_others() {
     let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
     let out = tracer.trace(&cfg).unwrap();
     let all = Maps::from_photons(out.photons.clone(), out.frame);
-    let full = Maps::from_photons(out.photons, out.frame);
-    let full = Maps::full_only(full.full.compact_photons().to_vec(), out.frame);
+    let full = Maps::full_only(out.photons, out.frame);
     assert!(full.is_full_only() && !all.is_full_only());
     let mut rc = RenderConfig::new(12, 12);
     rc.spp = 2;

@@ -133,13 +133,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             })
         })?;
         let stored = out.photons.len();
-        let maps = pool.install(|| {
-            if cfg.reads_split_maps() {
-                RenderMaps::from_photons(out.photons, out.frame)
-            } else {
-                RenderMaps::full_only(out.photons, out.frame)
-            }
-        });
+        let maps = pool.install(|| cfg.build_maps(out.photons, out.frame));
         (Some(maps), t.elapsed().as_secs_f64(), stored)
     };
     bar.set_position(0);

@@ -38,16 +38,28 @@ pub struct Lookup {
     pub max_radius: f32,
 }
 
-/// Shared kernel: `sum_p weight(p) * w(d_p) / (pi r^2 / 3)`.
+/// Shared kernel: the facing neighbours of `x`, then [`cone_filter`].
 fn kernel_sum(
     map: &PhotonMap,
     x: Vec3,
     n: Vec3,
-    Lookup { k, max_radius }: Lookup,
+    lookup: Lookup,
     scratch: &mut Vec<Neighbor>,
+    weight: impl FnMut(Vec3, Vec3) -> Vec3,
+) -> Estimate {
+    map.nearest_k_facing(x, n, lookup.k, lookup.max_radius, scratch);
+    cone_filter(map, scratch, lookup, weight)
+}
+
+/// The cone-filtered sum `sum_p weight(p) * w(d_p) / (pi r^2 / 3)` over the
+/// neighbours already found in `scratch` (sorted by distance, at most
+/// `lookup.k` of them), with the kernel radius the module docs give.
+pub(super) fn cone_filter(
+    map: &PhotonMap,
+    scratch: &[Neighbor],
+    Lookup { k, max_radius }: Lookup,
     mut weight: impl FnMut(Vec3, Vec3) -> Vec3,
 ) -> Estimate {
-    map.nearest_k_facing(x, n, k, max_radius, scratch);
     let found = scratch.len();
     if found == 0 {
         return Estimate {
@@ -66,7 +78,7 @@ fn kernel_sum(
     let r2 = r2.max(step * step);
     let r = r2.sqrt();
     let mut sum = Vec3::ZERO;
-    for nb in scratch.iter() {
+    for nb in scratch {
         let p = map.photon(nb.index);
         let w = (1.0 - nb.dist2.sqrt() / r).max(0.0);
         sum += weight(p.direction, p.power) * w;

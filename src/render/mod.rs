@@ -209,6 +209,21 @@ impl RenderConfig {
         }
     }
 
+    /// The maps these settings read, built from a trace's compact photons:
+    /// all three when [`RenderConfig::reads_split_maps`], else the full map
+    /// alone ([`Maps::full_only`](crate::engine::Maps::full_only)).
+    pub fn build_maps(
+        &self,
+        photons: Vec<crate::photon_map::CompactPhoton>,
+        frame: crate::photon_map::Quantizer,
+    ) -> RenderMaps {
+        if self.reads_split_maps() {
+            RenderMaps::from_photons(photons, frame)
+        } else {
+            RenderMaps::full_only(photons, frame)
+        }
+    }
+
     /// Checks the settings, including that the image fits in memory.
     ///
     /// # Errors

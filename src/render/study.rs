@@ -22,10 +22,7 @@
 
 use super::path::PathPart;
 use super::path_render::{light_pixels, PathHalves};
-use super::{
-    mean_bias, relative_rmse_masked, render_path, render_with, Image, RenderConfig, RenderMaps,
-    View,
-};
+use super::{mean_bias, relative_rmse_masked, render_path, render_with, Image, RenderConfig, View};
 use crate::embree::CommittedScene;
 use crate::engine::{Budget, Mode, TraceConfig, Tracer};
 use crate::error::Result;
@@ -178,11 +175,7 @@ pub fn run_study(
         let out = Tracer::new(PreparedScene::new(scene.clone(), rt)?).trace(&tc)?;
         let trace_s = t.elapsed().as_secs_f64();
         let stored = out.photons.len();
-        let maps = if base.reads_split_maps() {
-            RenderMaps::from_photons(out.photons, out.frame)
-        } else {
-            RenderMaps::full_only(out.photons, out.frame)
-        };
+        let maps = base.build_maps(out.photons, out.frame);
         let maps_s = maps.build_total_s();
         let measure = |spp: u32, rows: &mut Vec<PhotonRow>| -> Result<bool> {
             let mut c = base.clone();
