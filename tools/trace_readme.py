@@ -21,7 +21,11 @@ def main(args):
             "trace s", "rays", "Mrays/s", "kd-tree s"] + (["of raw"] if raw else [])
     out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for i, f in enumerate(args):
-        d = json.load(open(f))
+        try:
+            d = json.load(open(f))
+            d["rays_per_s"], d["map_bytes"], d["peak_rss_bytes"], d["build_s"]
+        except (OSError, ValueError, KeyError) as e:
+            sys.exit(f"{f}: not the JSON of `adaptive-pm trace --json` ({e})")
         mrays = d["rays_per_s"] / 1e6
         row = [f"{d['emitted']:,}", f"{d['stored']:,}", str(d["threads"]),
                f"{d['map_bytes'] / 1e6:,.0f}", f"{d['peak_rss_bytes'] / 1e6:,.0f}",
