@@ -192,12 +192,15 @@ fn sign_not_zero(v: f32) -> f32 {
     }
 }
 
-/// Rounds a value >= 0 to the nearest integer (halves up). `f64::round` is a libm
-/// call on baseline x86-64; a truncating cast is one instruction.
+/// `v` rounded to the nearest integer (ties to even), for `0 <= v < 2^51`.
+/// Adding `2^52` leaves the integer in the low bits of the mantissa: no
+/// float-to-integer conversion, which Rust makes saturating (on x86-64 a
+/// compare and two selects around each `cvttsd2si`). Encoding runs at every
+/// stored photon, so this is on the tracer's hot path.
 #[inline(always)]
-fn round_non_negative(v: f64) -> f64 {
-    // i64, not u64: f64 -> u64 is a branchy sequence on x86-64, f64 -> i64 one instruction.
-    ((v + 0.5) as i64) as f64
+fn round_to_u64(v: f64) -> u64 {
+    const TWO_52: f64 = 4_503_599_627_370_496.0;
+    (v + TWO_52).to_bits() & ((1 << 52) - 1)
 }
 
 /// `2^n` for `n` in the normal range of f64 (`powi` is a loop in compiler-rt).
@@ -218,8 +221,9 @@ fn oct_encode(d: Vec3) -> u32 {
     } else {
         (n.x, n.y)
     };
-    const HALF: f32 = (OCT_MAX / 2) as f32;
-    let q = |v: f32| (v.clamp(-1.0, 1.0) * HALF + HALF + 0.5) as i32 as u32;
+    const HALF: f64 = (OCT_MAX / 2) as f64;
+    // max/min, not clamp: they map NaN to a bound.
+    let q = |v: f32| round_to_u64(v.max(-1.0).min(1.0) as f64 * HALF + HALF) as u32;
     q(x) | (q(y) << OCT_BITS)
 }
 
@@ -292,10 +296,11 @@ impl Quantizer {
     /// Packs a record. The caller checks that the position, power and direction are
     /// finite and the direction non-zero (`PhotonMap::build` skips other records);
     /// positions outside the box are clamped onto it.
+    #[inline]
     pub fn encode(&self, r: &PhotonRecord) -> CompactPhoton {
         let q = |x: f32, o: f64| {
             let g = (x as f64 - o) * self.inv_step;
-            round_non_negative(g.max(0.0).min(POSITION_MAX as f64)) as i64 as u64
+            round_to_u64(g.max(0.0).min(POSITION_MAX as f64))
         };
         let p = r.position;
         let pos = q(p.x, self.origin[0])
@@ -309,6 +314,7 @@ impl Quantizer {
         }
     }
 
+    #[inline]
     fn encode_power(&self, power: Vec3) -> u32 {
         if self.power_scale == 0.0 {
             return 0;
@@ -323,8 +329,7 @@ impl Quantizer {
         let e = ((max.to_bits() >> 52) & 0x7ff) as i32 - 1023;
         // E - 39 = e - 8 puts the largest mantissa in [256, 512).
         let mut exp = (e + POWER_BIAS - 8).clamp(0, 31);
-        let mantissa =
-            |exp: i32, v: f64| round_non_negative(v * exp2(POWER_BIAS - exp)) as i32 as u32;
+        let mantissa = |exp: i32, v: f64| round_to_u64(v * exp2(POWER_BIAS - exp)) as u32;
         if mantissa(exp, max) >= 512 {
             exp += 1; // rounding carried; max <= 1 keeps exp <= 31
         }
