@@ -33,6 +33,7 @@ impl AlbedoTable {
     }
 
     /// Linear interpolation at `cos_theta_in` (clamped to [0, 1]).
+    #[inline]
     pub fn at(&self, cos_theta_in: f32) -> Vec3 {
         let x = cos_theta_in.clamp(0.0, 1.0) * (ALBEDO_NODES - 1) as f32;
         let i = (x as usize).min(ALBEDO_NODES - 2);

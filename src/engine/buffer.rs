@@ -21,7 +21,9 @@ pub(super) fn trace_wave<C: RayCaster>(
 ) -> Vec<BatchOut> {
     let base = photons.len();
     if !records_only {
-        photons.resize(base + wave.len(), CompactPhoton::default());
+        // In parallel: these writes are the first touch of fresh pages (a
+        // page fault and the kernel's zeroing each), serial otherwise.
+        photons.par_extend(rayon::iter::repeatn(CompactPhoton::default(), wave.len()));
     }
     let slots = &mut photons[base..];
     let slot_len = if records_only { 0 } else { batch };
