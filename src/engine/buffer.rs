@@ -23,7 +23,7 @@ pub(super) fn trace_wave<C: RayCaster>(
     if !records_only {
         // In parallel: these writes are the first touch of fresh pages (a
         // page fault and the kernel's zeroing each), serial otherwise.
-        photons.par_extend(rayon::iter::repeatn(CompactPhoton::default(), wave.len()));
+        photons.par_extend(rayon::iter::repeat_n(CompactPhoton::default(), wave.len()));
     }
     let slots = &mut photons[base..];
     let slot_len = if records_only { 0 } else { batch };

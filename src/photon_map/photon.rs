@@ -223,6 +223,7 @@ fn oct_encode(d: Vec3) -> u32 {
     };
     const HALF: f64 = (OCT_MAX / 2) as f64;
     // max/min, not clamp: they map NaN to a bound.
+    #[allow(clippy::manual_clamp)]
     let q = |v: f32| round_to_u64(v.max(-1.0).min(1.0) as f64 * HALF + HALF) as u32;
     q(x) | (q(y) << OCT_BITS)
 }
