@@ -1,0 +1,70 @@
+//! The tracer's share of raw Embree, measured in one process: each round
+//! times raw `rtcIntersect1` calls on incoherent rays of the Cornell box
+//! (as `adaptive-pm bench rays` does, best of 3 passes) and then one classic
+//! trace, and prints the trace's rays per second over the raw rate.
+//!
+//! On a shared or virtual machine both rates drift by tens of percent from
+//! minute to minute; a ratio taken within one round, and the median over the
+//! rounds, drifts much less than two commands run apart.
+//!
+//! `cargo run --release --example trace_vs_raw -- [N_MAX] [THREADS] [ROUNDS]`
+//! (defaults 2000000, 1, 5). With `NORAW=1` the raw passes are skipped (for
+//! profiling the tracer alone, e.g. under `perf record`).
+
+use adaptive_pm::embree::{measure_throughput, thread_pool, Device};
+use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
+use adaptive_pm::scene::Scene;
+
+fn arg<T: std::str::FromStr>(i: usize, default: T) -> T {
+    match std::env::args().nth(i) {
+        None => default,
+        Some(s) => s.parse().unwrap_or_else(|_| {
+            eprintln!("argument {i}: {s:?} is not a number");
+            std::process::exit(2)
+        }),
+    }
+}
+
+fn main() -> Result<(), adaptive_pm::Error> {
+    let n_max: u64 = arg(1, 2_000_000);
+    let threads: usize = arg(2, 1);
+    let rounds: usize = arg(3, 5).max(1);
+    let skip_raw = std::env::var_os("NORAW").is_some();
+
+    let scene = Scene::cornell()?;
+    let rays = scene
+        .surface_sampler()
+        .incoherent_rays(1_000_000, 1, scene.ray_epsilon());
+    let device = Device::new()?;
+    let tracer = Tracer::new(scene.commit(&device)?);
+    let pool = thread_pool(threads)?;
+    let cfg = TraceConfig::new(Mode::Classic, Budget::NMax(n_max));
+
+    println!("round  raw Mrays/s  trace s  trace Mrays/s  of raw");
+    let mut ratios = Vec::new();
+    for round in 0..rounds {
+        let raw = if skip_raw {
+            f64::NAN
+        } else {
+            measure_throughput(tracer.prepared().caster(), &rays, threads)?.raw_mrays_per_s
+        };
+        let run = pool.install(|| tracer.trace(&cfg))?;
+        let rate = run.report.rays as f64 / run.report.trace_s / 1e6;
+        ratios.push(rate / raw);
+        println!(
+            "{round:>5}  {raw:>11.2}  {:>7.3}  {rate:>13.2}  {:>6.3}",
+            run.report.trace_s,
+            rate / raw
+        );
+    }
+    if !skip_raw {
+        ratios.sort_by(f64::total_cmp);
+        println!(
+            "{} rays a trace on {threads} thread(s); of raw: median {:.3}, best {:.3}",
+            pool.install(|| tracer.trace(&cfg))?.report.rays,
+            ratios[ratios.len() / 2],
+            ratios[ratios.len() - 1]
+        );
+    }
+    Ok(())
+}
