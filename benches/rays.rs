@@ -10,9 +10,11 @@
 //! of parallel rays, as camera rays are).
 //!
 //! A second group, `tracer`, puts the photon tracer itself (classic mode,
-//! Cornell box, N_MAX = 1e5, one thread, shading and storage included) beside
-//! the raw call on the Cornell rays, both in rays per second: the tracer's
-//! share of raw Embree throughput.
+//! N_MAX = 1e5, one thread, shading and storage included) beside the raw
+//! call on incoherent rays of the same scene, both in rays per second: the
+//! tracer's share of raw Embree throughput, on the Cornell box, on the same
+//! box with every triangle split into 1024 (32 768 triangles: the same
+//! photons, dearer rays) and on the gallery.
 //!
 //! Timed in *thread CPU time* (`CLOCK_THREAD_CPUTIME_ID`) on Linux, not wall
 //! time: the development machine runs several jobs on 2 cores and wall-clock
@@ -169,6 +171,34 @@ fn surface_rays(scene: &Scene) -> Vec<Ray> {
         .incoherent_rays(RAYS, 1, scene.ray_epsilon())
 }
 
+/// `scene` with every triangle split into 4^`levels` (midpoint subdivision):
+/// the same surfaces, materials and lights, and rays that cost more.
+fn subdivided(scene: &Scene, levels: u32) -> Scene {
+    let mut out = Scene::new();
+    for m in scene.materials() {
+        out.add_material(m.clone());
+    }
+    for mesh in scene.meshes() {
+        let mut tris: Vec<[Vec3; 3]> = (0..mesh.indices.len()).map(|i| mesh.triangle(i)).collect();
+        for _ in 0..levels {
+            tris = tris
+                .iter()
+                .flat_map(|&[a, b, c]| {
+                    let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
+                    [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+                })
+                .collect();
+        }
+        let positions = tris.iter().flatten().copied().collect();
+        let indices = (0..tris.len() as u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect();
+        out.add_mesh(mesh.name.clone(), positions, indices, mesh.material)
+            .unwrap();
+    }
+    out
+}
+
 fn bench_rays(c: &mut Criterion) {
     set_flush_denormals();
     let device = Device::new().unwrap();
@@ -236,11 +266,14 @@ fn bench_tracer(c: &mut Criterion) {
     let mut group = c.benchmark_group("tracer");
     group.sample_size(10);
     group.measurement_time(Duration::from_secs(5));
-    // The Cornell box (32 triangles) and the gallery (988 triangles, glossy
-    // surfaces, four lights): the tracer's share of raw Embree grows with the
-    // cost of a ray.
+    // The Cornell box (32 triangles), the same box with every triangle split
+    // into 4^5 (32 768 triangles: the same photons, dearer rays) and the
+    // gallery (988 triangles, glossy surfaces, four lights): the tracer's
+    // share of raw Embree grows with the cost of a ray.
+    let cornell = Scene::cornell().unwrap();
     for (name, scene) in [
-        ("cornell", Scene::cornell().unwrap()),
+        ("cornell_32k", subdivided(&cornell, 5)),
+        ("cornell", cornell),
         ("gallery", Scene::load(gallery).unwrap()),
     ] {
         let rt = scene.embree_geometry(&device).unwrap();
