@@ -9,46 +9,50 @@ use crate::raycast::RayCaster;
 use crate::scene::Scene;
 use rayon::prelude::*;
 
-/// Traces one wave: batches in parallel, each writing its stored photons to
-/// its own slots at the end of `photons`; the gaps (escaped photons, delta
-/// surfaces) are then closed in place, in batch order.
+/// Traces one wave (chunks of paths, each cut into batches of at most
+/// `batch`): batches in parallel, each writing its stored photons to its own
+/// slots at the end of `photons`; the gaps (escaped photons, delta surfaces)
+/// are then closed in place, in batch order.
 pub(super) fn trace_wave<C: RayCaster>(
     ctx: &ShadeContext<C>,
-    wave: &[PathState],
+    wave: &[Vec<PathState>],
     photons: &mut Vec<CompactPhoton>,
     batch: usize,
     records_only: bool,
 ) -> Vec<BatchOut> {
-    let base = photons.len();
-    if !records_only {
-        // In parallel: these writes are the first touch of fresh pages (a
-        // page fault and the kernel's zeroing each), serial otherwise.
-        photons.par_extend(rayon::iter::repeat_n(CompactPhoton::default(), wave.len()));
-    }
-    let slots = &mut photons[base..];
-    let slot_len = if records_only { 0 } else { batch };
-    let outs: Vec<BatchOut> = if records_only {
-        wave.par_chunks(batch)
+    let batches: Vec<&[PathState]> = wave.iter().flat_map(|c| c.chunks(batch)).collect();
+    if records_only {
+        return batches
+            .par_iter()
             .map_init(Scratch::default, |s, b| shade_batch(ctx, b, &mut [], s))
-            .collect()
-    } else {
-        slots
-            .par_chunks_mut(slot_len)
-            .zip(wave.par_chunks(batch))
-            .map_init(Scratch::default, |s, (slots, b)| {
-                shade_batch(ctx, b, slots, s)
-            })
-            .collect()
-    };
-    if !records_only {
-        let mut write = base;
-        for (i, o) in outs.iter().enumerate() {
-            let from = base + i * batch;
-            photons.copy_within(from..from + o.stored, write);
-            write += o.stored;
-        }
-        photons.truncate(write);
+            .collect();
     }
+    let base = photons.len();
+    let paths: usize = batches.iter().map(|b| b.len()).sum();
+    // In parallel: these writes are the first touch of fresh pages (a
+    // page fault and the kernel's zeroing each), serial otherwise.
+    photons.par_extend(rayon::iter::repeat_n(CompactPhoton::default(), paths));
+    let mut slots: Vec<&mut [CompactPhoton]> = Vec::with_capacity(batches.len());
+    let mut rest = &mut photons[base..];
+    for b in &batches {
+        let (mine, others) = rest.split_at_mut(b.len());
+        slots.push(mine);
+        rest = others;
+    }
+    let outs: Vec<BatchOut> = batches
+        .par_iter()
+        .zip(slots)
+        .map_init(Scratch::default, |s, (b, slots)| {
+            shade_batch(ctx, b, slots, s)
+        })
+        .collect();
+    let (mut write, mut from) = (base, base);
+    for (b, o) in batches.iter().zip(&outs) {
+        photons.copy_within(from..from + o.stored, write);
+        write += o.stored;
+        from += b.len();
+    }
+    photons.truncate(write);
     outs
 }
 

@@ -20,6 +20,7 @@ pub mod config;
 pub mod counts;
 mod density_control;
 pub mod measure;
+mod queue;
 pub mod report;
 pub mod shard;
 pub mod stream;

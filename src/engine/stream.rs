@@ -4,7 +4,8 @@
 //! compact, into one map buffer reserved up front.
 //!
 //! Schedule (a pure function of the settings, never of the thread count or
-//! the batch size, so budget decisions and the map are reproducible):
+//! the batch size, so budget decisions and the map are reproducible; the
+//! queues are `PathQueue`s, whose chunks a wave takes without copying):
 //! 1. if some depth has at least `WAVE` paths pending, trace `WAVE` of the
 //!    deepest such depth (draining the deepest first bounds the queues);
 //! 2. else, if photons remain to be emitted, emit the next `WAVE` of them
@@ -17,6 +18,7 @@
 //! depth-1 photon).
 
 use super::counts::{photon_power, LightPlan};
+use super::queue::PathQueue;
 use super::shard::Shard;
 use super::wave::PathState;
 use crate::rng::{hash2, Rng};
@@ -30,7 +32,7 @@ pub const WAVE: usize = 1 << 14;
 /// Pending paths per depth and the emission cursor.
 pub(super) struct Schedule {
     /// `pending[d]`: paths waiting at depth `d`.
-    pub pending: Vec<Vec<PathState>>,
+    pub(super) pending: Vec<PathQueue>,
     /// Next global emission index (lights in order).
     next: u64,
     emitted: u64,
@@ -43,7 +45,7 @@ impl Schedule {
     pub fn new(emitted: u64, max_depth: u32, whole_depths: bool, shard: Shard) -> Self {
         Schedule {
             shard,
-            pending: vec![Vec::new(); max_depth as usize + 2],
+            pending: vec![PathQueue::default(); max_depth as usize + 2],
             next: 0,
             emitted,
             wave: if whole_depths { usize::MAX } else { WAVE },
@@ -52,7 +54,7 @@ impl Schedule {
 
     /// Paths pending at every depth.
     pub fn pending_len(&self) -> usize {
-        self.pending.iter().map(Vec::len).sum()
+        self.pending.iter().map(PathQueue::len).sum()
     }
 
     /// Photons emitted so far.
@@ -60,15 +62,15 @@ impl Schedule {
         self.next
     }
 
-    /// The next wave into `out` (cleared first) and its depth; `None` when
-    /// the run is done.
+    /// The next wave into `out` (cleared first), as chunks in queue order,
+    /// and its depth; `None` when the run is done.
     pub fn next_wave(
         &mut self,
         scene: &Scene,
         plans: &[LightPlan],
         seed: u64,
         epsilon: f32,
-        out: &mut Vec<PathState>,
+        out: &mut Vec<Vec<PathState>>,
     ) -> Option<usize> {
         out.clear();
         let full = (0..self.pending.len())
@@ -78,15 +80,17 @@ impl Schedule {
             Some(d) if self.wave != usize::MAX => d,
             _ if self.next < self.emitted => {
                 let n = (self.emitted - self.next).min(self.wave as u64);
-                emit(scene, plans, self.shard, seed, epsilon, self.next, n, out);
+                let mut paths = Vec::new();
+                emit(
+                    scene, plans, self.shard, seed, epsilon, self.next, n, &mut paths,
+                );
+                out.push(paths);
                 self.next += n;
                 return Some(0);
             }
             _ => (0..self.pending.len()).find(|&d| !self.pending[d].is_empty())?,
         };
-        let q = &mut self.pending[depth];
-        let start = q.len().saturating_sub(self.wave);
-        out.extend(q.drain(start..));
+        self.pending[depth].take_last(self.wave, out);
         Some(depth)
     }
 }

@@ -21,23 +21,25 @@ use std::time::Instant;
 
 /// An upper bound of the children a wave can make: the sum over its photons of
 /// `min(cap, max(alpha_E N_MAX, 1)) + 1` (`alpha_D <= 1`, Russian roulette
-/// makes at most one child, and rounding up adds at most one). Summed in
-/// fixed chunks, in order, so it does not depend on the thread count or the
-/// batch size.
-fn split_bound(queue: &[PathState], max_light_luminance: f32, n_max: u64, cap: u32) -> f64 {
-    const CHUNK: usize = 4096;
-    let per_chunk: Vec<f64> = queue
-        .par_chunks(CHUNK)
-        .map(|c| {
-            c.iter()
-                .map(|p| {
-                    let s = luminance(p.power) as f64 / max_light_luminance as f64 * n_max as f64;
-                    s.max(1.0).min(cap as f64) + 1.0
-                })
-                .sum::<f64>()
+/// makes at most one child, and rounding up adds at most one). Each term is
+/// rounded up to a multiple of 2^-16 and summed as an integer: exact, so the
+/// bound does not depend on how the wave is cut into chunks and batches, nor
+/// on the thread count.
+fn split_bound(wave: &[Vec<PathState>], max_light_luminance: f32, n_max: u64, cap: u32) -> f64 {
+    const UNIT: f64 = 65_536.0;
+    let units: u128 = wave
+        .par_iter()
+        .flat_map_iter(|c| c.iter())
+        .map(|p| {
+            let s = luminance(p.power) as f64 / max_light_luminance as f64 * n_max as f64;
+            // At most (cap + 1) 2^16 <= 2^48: exact in a u64. Rounded up
+            // without `ceil` (a libm call on baseline x86-64).
+            let v = (s.max(1.0).min(cap as f64) + 1.0) * UNIT;
+            let whole = v as u64;
+            u128::from(whole + u64::from((whole as f64) < v))
         })
-        .collect();
-    per_chunk.iter().sum()
+        .sum();
+    units as f64 / UNIT
 }
 
 /// A material's alpha_D table (`None` outside adaptive mode and for delta BRDFs).
@@ -284,7 +286,7 @@ impl<C: RayCaster> Tracer<C> {
             reserve(&mut photons, guess, budget_bytes)?;
         }
         let mut schedule = Schedule::new(emitted, cfg.max_depth(), density.is_some(), shard);
-        let mut wave: Vec<PathState> = Vec::new();
+        let mut wave: Vec<Vec<PathState>> = Vec::new();
         let mut splitting = cfg.mode() == Mode::Adaptive;
         // What the run holds, in stored photons' worth of memory: the buffer
         // and the pending paths (a path is three photons' worth).
@@ -292,10 +294,11 @@ impl<C: RayCaster> Tracer<C> {
             (std::mem::size_of::<PathState>() / BYTES_PER_STORED_PHOTON as usize) as u64;
         while let Some(depth) = schedule.next_wave(scene, &plans, cfg.seed(), epsilon, &mut wave) {
             let wave_start = Instant::now();
+            let wave_len: usize = wave.iter().map(Vec::len).sum();
             let held = |photons: usize, pending: usize| photons as u64 + pending as u64 * path_cost;
             let stored_so_far =
                 photons.len() + density.as_ref().map_or(0, |d| d.counts().0 as usize);
-            let used = held(stored_so_far, schedule.pending_len() + wave.len());
+            let used = held(stored_so_far, schedule.pending_len() + wave_len);
             // Splitting stops once the run holds half the budget; the rest
             // of the run is then classic Russian roulette.
             if splitting && used * 2 > max_photons {
@@ -319,12 +322,12 @@ impl<C: RayCaster> Tracer<C> {
             }
             // Every photon of the wave may store once: stop before the
             // buffer could overflow.
-            if density.is_none() && photons.len() + wave.len() > photons.capacity() {
-                if (photons.len() + wave.len()) as u64 > max_photons {
+            if density.is_none() && photons.len() + wave_len > photons.capacity() {
+                if (photons.len() + wave_len) as u64 > max_photons {
                     report.budget_bound = true;
                     break;
                 }
-                let more = (photons.capacity().max(wave.len()) as u64)
+                let more = (photons.capacity().max(wave_len) as u64)
                     .min(max_photons - photons.len() as u64) as usize;
                 reserve(&mut photons, more, budget_bytes)?;
             }
@@ -363,7 +366,7 @@ impl<C: RayCaster> Tracer<C> {
                 if let Some(dc) = &mut density {
                     dc.offer(&out.records, &out.normals);
                 }
-                schedule.pending[depth + 1].extend_from_slice(&out.children);
+                schedule.pending[depth + 1].push_chunk(out.children);
             }
             stats.seconds += wave_start.elapsed().as_secs_f64();
             progress(Progress {
