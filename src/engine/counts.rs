@@ -125,10 +125,14 @@ pub fn expected_children(s: f64, r: f64, cap: u32) -> (f64, bool) {
     }
 }
 
-/// `floor(m)`, plus one with probability `frac(m)`: an integer with mean `m`.
+/// `floor(m)`, plus one with probability `frac(m)`: an integer with mean `m`
+/// (`m >= 0`; a negative or NaN `m` gives 0, one above `u32::MAX` gives
+/// `u32::MAX`).
 pub fn round_stochastic(m: f64, u: f32) -> u32 {
-    let f = m.floor();
-    f as u32 + u32::from((u as f64) < m - f)
+    // A truncating cast is the floor for m >= 0, without `floor` (a libm
+    // call on baseline x86-64, at every hit).
+    let f = m as u32;
+    f.saturating_add(u32::from((u as f64) < m - f as f64))
 }
 
 #[cfg(test)]
@@ -144,6 +148,14 @@ mod tests {
                 .sum();
             // a stratified u gives the mean to within 1/n
             assert!((sum as f64 / n as f64 - m).abs() < 2.0 / n as f64, "m={m}");
+        }
+        for (m, want) in [
+            (-0.5, 0),
+            (f64::NAN, 0),
+            (1e12, u32::MAX),
+            (4294967295.5, u32::MAX),
+        ] {
+            assert_eq!(round_stochastic(m, 0.0), want, "m={m}");
         }
     }
 
