@@ -241,6 +241,7 @@ fn bench_rays(c: &mut Criterion) {
             });
             for (name, kernel) in [
                 ("batch_single", BatchKernel::Single),
+                ("batch_packet8", BatchKernel::Packet8),
                 ("batch_packet16", BatchKernel::Packet16),
             ] {
                 group.bench_function(id(name), |b| {

@@ -8,8 +8,8 @@
 //! (a wrong triangle or face is off by >= 1e-2 in these scenes).
 
 use adaptive_pm::embree::{
-    measure_throughput, thread_pool, BatchKernel, CommittedScene, Device, Hit, Ray, SceneBuilder,
-    DEFAULT_BATCH_KERNEL, EMBREE_LARGE,
+    default_batch_kernel, measure_throughput, thread_pool, BatchKernel, CommittedScene, Device,
+    Hit, Ray, SceneBuilder, EMBREE_LARGE,
 };
 use adaptive_pm::rng::Rng;
 use adaptive_pm::sampling::spherical_direction;
@@ -163,10 +163,12 @@ fn invalid_rays_miss_instead_of_reaching_embree() {
     // Invalid rays beside valid ones in one packet: the valid lanes still hit.
     let mut mixed = bad.to_vec();
     mixed.insert(3, good);
-    let mut hits = vec![None; mixed.len()];
-    scene.intersect_batch_with(BatchKernel::Packet16, &mixed, &mut hits);
-    for (ray, hit) in mixed.iter().zip(&hits) {
-        assert_eq!(hit.is_some(), *ray == good, "{ray:?}");
+    for kernel in [BatchKernel::Packet8, BatchKernel::Packet16] {
+        let mut hits = vec![None; mixed.len()];
+        scene.intersect_batch_with(kernel, &mixed, &mut hits);
+        for (ray, hit) in mixed.iter().zip(&hits) {
+            assert_eq!(hit.is_some(), *ray == good, "{kernel:?} {ray:?}");
+        }
     }
     for ray in bad {
         assert!(scene.intersect(&ray).is_none(), "{ray:?}");
@@ -174,7 +176,11 @@ fn invalid_rays_miss_instead_of_reaching_embree() {
     }
     let mut hits = vec![None; bad.len()];
     let mut occ = vec![true; bad.len()];
-    for kernel in [BatchKernel::Single, BatchKernel::Packet16] {
+    for kernel in [
+        BatchKernel::Single,
+        BatchKernel::Packet8,
+        BatchKernel::Packet16,
+    ] {
         scene.intersect_batch_with(kernel, &bad, &mut hits);
         scene.occluded_batch_with(kernel, &bad, &mut occ);
         assert!(hits.iter().all(Option::is_none) && occ.iter().all(|o| !o));
@@ -290,7 +296,11 @@ fn occlusion_agrees_with_closest_hit_and_batches_with_single_rays() {
         assert_eq!(h.is_some(), *o);
     }
 
-    for kernel in [BatchKernel::Single, BatchKernel::Packet16] {
+    for kernel in [
+        BatchKernel::Single,
+        BatchKernel::Packet8,
+        BatchKernel::Packet16,
+    ] {
         let mut hits = vec![None; rays.len()];
         let mut occ = vec![false; rays.len()];
         scene.intersect_batch_with(kernel, &rays, &mut hits);
@@ -302,7 +312,7 @@ fn occlusion_agrees_with_closest_hit_and_batches_with_single_rays() {
     }
     let mut hits = vec![None; rays.len()];
     scene.intersect_batch(&rays, &mut hits);
-    assert_eq!(hits, single, "default kernel {DEFAULT_BATCH_KERNEL:?}");
+    assert_eq!(hits, single, "default kernel {:?}", default_batch_kernel());
 }
 
 #[test]

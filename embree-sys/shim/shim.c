@@ -5,6 +5,8 @@ unsigned int apm_header_version_major(void) { return RTC_VERSION_MAJOR; }
 
 size_t apm_sizeof_rayhit(void) { return sizeof(struct RTCRayHit); }
 
+size_t apm_sizeof_rayhit8(void) { return sizeof(struct RTCRayHit8); }
+
 size_t apm_sizeof_rayhit16(void) { return sizeof(struct RTCRayHit16); }
 
 #if RTC_VERSION_MAJOR >= 4
@@ -21,6 +23,20 @@ void apm_occluded1(RTCScene scene, struct RTCRay* ray)
   struct RTCOccludedArguments args;
   rtcInitOccludedArguments(&args);
   rtcOccluded1(scene, ray, &args);
+}
+
+void apm_intersect8(const int* valid, RTCScene scene, struct RTCRayHit8* rayhit)
+{
+  struct RTCIntersectArguments args;
+  rtcInitIntersectArguments(&args);
+  rtcIntersect8(valid, scene, rayhit, &args);
+}
+
+void apm_occluded8(const int* valid, RTCScene scene, struct RTCRay8* ray)
+{
+  struct RTCOccludedArguments args;
+  rtcInitOccludedArguments(&args);
+  rtcOccluded8(valid, scene, ray, &args);
 }
 
 void apm_intersect16(const int* valid, RTCScene scene, struct RTCRayHit16* rayhit)
@@ -51,6 +67,20 @@ void apm_occluded1(RTCScene scene, struct RTCRay* ray)
   struct RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   rtcOccluded1(scene, &context, ray);
+}
+
+void apm_intersect8(const int* valid, RTCScene scene, struct RTCRayHit8* rayhit)
+{
+  struct RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcIntersect8(valid, scene, &context, rayhit);
+}
+
+void apm_occluded8(const int* valid, RTCScene scene, struct RTCRay8* ray)
+{
+  struct RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcOccluded8(valid, scene, &context, ray);
 }
 
 void apm_intersect16(const int* valid, RTCScene scene, struct RTCRayHit16* rayhit)

@@ -32,6 +32,9 @@ unsigned int apm_header_version_major(void);
 /* sizeof(struct RTCRayHit) as the C compiler sees it (80 in Embree 3, 96 in 4). */
 size_t apm_sizeof_rayhit(void);
 
+/* sizeof(struct RTCRayHit8) as the C compiler sees it. */
+size_t apm_sizeof_rayhit8(void);
+
 /* sizeof(struct RTCRayHit16) as the C compiler sees it. */
 size_t apm_sizeof_rayhit16(void);
 
@@ -40,6 +43,13 @@ void apm_intersect1(RTCScene scene, struct RTCRayHit* rayhit);
 
 /* Any hit of one ray: sets ray->tfar to -inf when occluded. */
 void apm_occluded1(RTCScene scene, struct RTCRay* ray);
+
+/* Closest hits of an 8-wide packet; valid[i] == -1 marks active lanes.
+ * valid and rayhit must be 32-byte aligned. */
+void apm_intersect8(const int* valid, RTCScene scene, struct RTCRayHit8* rayhit);
+
+/* Occlusion of an 8-wide packet; same conventions as apm_intersect8. */
+void apm_occluded8(const int* valid, RTCScene scene, struct RTCRay8* ray);
 
 /* Closest hits of a 16-wide packet; valid[i] == -1 marks active lanes.
  * valid and rayhit must be 64-byte aligned. */

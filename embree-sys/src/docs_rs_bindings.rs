@@ -2053,6 +2053,19 @@ extern "C" {
     pub fn apm_sizeof_rayhit16() -> usize;
 }
 extern "C" {
+    pub fn apm_sizeof_rayhit8() -> usize;
+}
+extern "C" {
+    pub fn apm_intersect8(
+        valid: *const ::std::os::raw::c_int,
+        scene: RTCScene,
+        rayhit: *mut RTCRayHit8,
+    );
+}
+extern "C" {
+    pub fn apm_occluded8(valid: *const ::std::os::raw::c_int, scene: RTCScene, ray: *mut RTCRay8);
+}
+extern "C" {
     pub fn apm_intersect1(scene: RTCScene, rayhit: *mut RTCRayHit);
 }
 extern "C" {

@@ -8,8 +8,16 @@ use adaptive_pm_embree_sys::*;
 #[test]
 fn rayhit_size_matches_the_c_compiler() {
     // SAFETY: the shim functions take no arguments and return a constant.
-    let (c_single, c_packet) = unsafe { (apm_sizeof_rayhit(), apm_sizeof_rayhit16()) };
+    let (c_single, c_packet8, c_packet) = unsafe {
+        (
+            apm_sizeof_rayhit(),
+            apm_sizeof_rayhit8(),
+            apm_sizeof_rayhit16(),
+        )
+    };
     assert_eq!(c_single, core::mem::size_of::<RTCRayHit>());
+    assert_eq!(c_packet8, core::mem::size_of::<RTCRayHit8>());
+    assert_eq!(core::mem::align_of::<RTCRayHit8>(), 32);
     assert_eq!(c_packet, core::mem::size_of::<RTCRayHit16>());
     assert_eq!(core::mem::align_of::<RTCRayHit16>(), 64);
 }

@@ -12,7 +12,8 @@
 //!   `normalize((v1 - v0) x (v2 - v0))`, counter-clockwise winding (checked
 //!   in `tests/embree_wrapper.rs`).
 //! - Batches: [`CommittedScene::intersect_batch`] uses
-//!   [`DEFAULT_BATCH_KERNEL`]; both kernels are measured in `benches/rays.rs`.
+//!   [`default_batch_kernel`] (packets of the CPU's vector width); every
+//!   kernel is measured in `benches/rays.rs`.
 //! - [`set_flush_denormals`] / [`thread_pool`]: Embree's traversal expects
 //!   flush-to-zero and denormals-are-zero on every tracing thread.
 //! - `throughput` (with the `cli` feature, hidden): the measurement behind
@@ -20,6 +21,7 @@
 
 mod commit;
 mod device;
+mod packet;
 mod scene;
 mod threads;
 // The `bench rays` measurement: the command line's, not a library API.
@@ -29,7 +31,8 @@ pub mod throughput;
 
 pub use commit::EmbreeScene;
 pub use device::Device;
-pub use scene::{BatchKernel, CommittedScene, SceneBuilder, DEFAULT_BATCH_KERNEL, EMBREE_LARGE};
+pub use packet::{default_batch_kernel, BatchKernel};
+pub use scene::{CommittedScene, SceneBuilder, EMBREE_LARGE};
 pub use threads::{
     flush_denormals_enabled, max_threads, set_flush_denormals, thread_pool, MAX_THREADS_PER_CORE,
 };

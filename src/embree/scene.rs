@@ -23,6 +23,7 @@ use embree_sys as sys;
 use glam::Vec3;
 
 use super::device::{Device, DeviceInner};
+use super::packet::{default_batch_kernel, BatchKernel};
 use super::{Hit, Ray};
 use crate::{Error, Result};
 
@@ -242,26 +243,6 @@ impl<'d> SceneBuilder<'d> {
     }
 }
 
-/// How a batch of rays is handed to Embree.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BatchKernel {
-    /// One `rtcIntersect1` / `rtcOccluded1` call per ray.
-    Single,
-    /// 16-ray packets (`rtcIntersect16` / `rtcOccluded16`).
-    Packet16,
-}
-
-/// The kernel [`CommittedScene::intersect_batch`] and
-/// [`CommittedScene::occluded_batch`] use.
-///
-/// 16-wide packets measured 1.1-1.25x faster than a loop of single-ray
-/// calls writing the same output, for incoherent rays (the photon case) in
-/// both a 12- and a 49k-triangle box (`benches/rays.rs`, thread CPU time,
-/// Embree 3.13.5 on an AVX-512 CPU, three alternating runs each). Results are
-/// bit-identical either way (`tests/embree_wrapper.rs`). On CPUs without
-/// AVX-512 Embree splits 16-wide packets internally; re-measure there.
-pub const DEFAULT_BATCH_KERNEL: BatchKernel = BatchKernel::Packet16;
-
 /// A built, immutable scene. Ray queries take `&self` and may run on any
 /// number of threads at once.
 pub struct CommittedScene {
@@ -333,38 +314,6 @@ pub(crate) fn to_rtc_rayhit(ray: &Ray) -> sys::RTCRayHit {
     sys::RTCRayHit {
         ray: to_rtc_ray(ray),
         hit,
-    }
-}
-
-/// Number of rays in an Embree packet.
-const PACKET: usize = 16;
-
-/// Embree's 16-lane validity mask (`-1` active, `0` inactive), 64-byte aligned
-/// as `rtcIntersect16` requires.
-#[repr(C, align(64))]
-struct ValidMask([i32; PACKET]);
-
-/// Fills the ray part of a packet; lanes past `rays.len()` or holding an
-/// invalid ray are masked off.
-#[inline]
-fn fill_packet(rays: &[Ray], p: &mut sys::RTCRay16, valid: &mut ValidMask) {
-    for lane in 0..PACKET {
-        // An invalid ray is replaced, not only masked (see the module docs).
-        let r = rays.get(lane).copied().filter(is_valid);
-        valid.0[lane] = if r.is_some() { -1 } else { 0 };
-        let r = r.unwrap_or_else(|| Ray::new(Vec3::ZERO, Vec3::Z));
-        p.org_x[lane] = r.origin.x;
-        p.org_y[lane] = r.origin.y;
-        p.org_z[lane] = r.origin.z;
-        p.tnear[lane] = r.tnear;
-        p.dir_x[lane] = r.dir.x;
-        p.dir_y[lane] = r.dir.y;
-        p.dir_z[lane] = r.dir.z;
-        p.time[lane] = 0.0;
-        p.tfar[lane] = r.tfar;
-        p.mask[lane] = u32::MAX;
-        p.id[lane] = 0;
-        p.flags[lane] = 0;
     }
 }
 
@@ -443,20 +392,20 @@ impl CommittedScene {
     }
 
     /// [`intersect`](Self::intersect) for every ray, with
-    /// [`DEFAULT_BATCH_KERNEL`]. Results are identical to `intersect`'s.
+    /// [`default_batch_kernel`]. Results are identical to `intersect`'s.
     ///
     /// # Panics
     /// If `rays` and `hits` differ in length.
     pub fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
-        self.intersect_batch_with(DEFAULT_BATCH_KERNEL, rays, hits);
+        self.intersect_batch_with(default_batch_kernel(), rays, hits);
     }
 
-    /// [`occluded`](Self::occluded) for every ray, with [`DEFAULT_BATCH_KERNEL`].
+    /// [`occluded`](Self::occluded) for every ray, with [`default_batch_kernel`].
     ///
     /// # Panics
     /// If `rays` and `out` differ in length.
     pub fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
-        self.occluded_batch_with(DEFAULT_BATCH_KERNEL, rays, out);
+        self.occluded_batch_with(default_batch_kernel(), rays, out);
     }
 
     /// [`intersect_batch`](Self::intersect_batch) with a chosen kernel.
@@ -480,25 +429,8 @@ impl CommittedScene {
                     *hit = self.intersect(ray);
                 }
             }
-            BatchKernel::Packet16 => {
-                let mut packet = sys::RTCRayHit16::default();
-                let mut valid = ValidMask([0; PACKET]);
-                for (rays, hits) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
-                    fill_packet(rays, &mut packet.ray, &mut valid);
-                    packet.hit.geomID = [sys::RTC_INVALID_GEOMETRY_ID; PACKET];
-                    // SAFETY: the scene is committed and alive; `valid` and
-                    // `packet` are initialised, 64-byte aligned (checked by
-                    // their types' `align` attributes) and exclusively ours.
-                    unsafe { sys::apm_intersect16(valid.0.as_ptr(), self.raw(), &mut packet) };
-                    for (lane, hit) in hits.iter_mut().enumerate() {
-                        *hit = if valid.0[lane] == 0 {
-                            None
-                        } else {
-                            self.packet_hit(&packet, lane)
-                        };
-                    }
-                }
-            }
+            BatchKernel::Packet8 => self.intersect_packets::<sys::RTCRayHit8>(rays, hits),
+            BatchKernel::Packet16 => self.intersect_packets::<sys::RTCRayHit16>(rays, hits),
         }
     }
 
@@ -514,35 +446,8 @@ impl CommittedScene {
                     *o = self.occluded(ray);
                 }
             }
-            BatchKernel::Packet16 => {
-                let mut packet = sys::RTCRay16::default();
-                let mut valid = ValidMask([0; PACKET]);
-                for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
-                    fill_packet(rays, &mut packet, &mut valid);
-                    // SAFETY: as in `intersect_batch_with`, with an `RTCRay16`.
-                    unsafe { sys::apm_occluded16(valid.0.as_ptr(), self.raw(), &mut packet) };
-                    for (lane, o) in out.iter_mut().enumerate() {
-                        *o = valid.0[lane] != 0 && packet.tfar[lane] == f32::NEG_INFINITY;
-                    }
-                }
-            }
+            BatchKernel::Packet8 => self.occluded_packets::<sys::RTCRay8>(rays, out),
+            BatchKernel::Packet16 => self.occluded_packets::<sys::RTCRay16>(rays, out),
         }
-    }
-
-    #[inline]
-    fn packet_hit(&self, p: &sys::RTCRayHit16, lane: usize) -> Option<Hit> {
-        let geom_id = p.hit.geomID[lane];
-        if geom_id == sys::RTC_INVALID_GEOMETRY_ID {
-            return None;
-        }
-        Some(Hit {
-            t: p.ray.tfar[lane],
-            ng: Vec3::new(p.hit.Ng_x[lane], p.hit.Ng_y[lane], p.hit.Ng_z[lane]).normalize_or_zero(),
-            geom_id,
-            prim_id: p.hit.primID[lane],
-            u: p.hit.u[lane],
-            v: p.hit.v[lane],
-            material: self.material(geom_id).unwrap_or(u32::MAX),
-        })
     }
 }
