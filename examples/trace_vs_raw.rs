@@ -41,7 +41,7 @@ fn main() -> Result<(), adaptive_pm::Error> {
     let cfg = TraceConfig::new(Mode::Classic, Budget::NMax(n_max));
 
     println!("round  raw Mrays/s  trace s  trace Mrays/s  of raw");
-    let mut ratios = Vec::new();
+    let (mut ratios, mut rays_per_trace) = (Vec::new(), 0);
     for round in 0..rounds {
         let raw = if skip_raw {
             f64::NAN
@@ -49,7 +49,8 @@ fn main() -> Result<(), adaptive_pm::Error> {
             measure_throughput(tracer.prepared().caster(), &rays, threads)?.raw_mrays_per_s
         };
         let run = pool.install(|| tracer.trace(&cfg))?;
-        let rate = run.report.rays as f64 / run.report.trace_s / 1e6;
+        rays_per_trace = run.report.rays;
+        let rate = rays_per_trace as f64 / run.report.trace_s / 1e6;
         ratios.push(rate / raw);
         println!(
             "{round:>5}  {raw:>11.2}  {:>7.3}  {rate:>13.2}  {:>6.3}",
@@ -60,8 +61,7 @@ fn main() -> Result<(), adaptive_pm::Error> {
     if !skip_raw {
         ratios.sort_by(f64::total_cmp);
         println!(
-            "{} rays a trace on {threads} thread(s); of raw: median {:.3}, best {:.3}",
-            pool.install(|| tracer.trace(&cfg))?.report.rays,
+            "{rays_per_trace} rays a trace on {threads} thread(s); of raw: median {:.3}, best {:.3}",
             ratios[ratios.len() / 2],
             ratios[ratios.len() - 1]
         );

@@ -44,7 +44,7 @@ pub fn default_batch_kernel() -> BatchKernel {
 /// `rtcIntersect16` requires (8-wide calls read the first 8 lanes and need
 /// 32 bytes).
 #[repr(C, align(64))]
-pub(super) struct ValidMask(pub [i32; 16]);
+pub(super) struct ValidMask([i32; 16]);
 
 /// The ray lanes of a packet.
 pub(super) trait RayLanes: Default {
@@ -173,18 +173,10 @@ impl CommittedScene {
             unsafe { packet.trace(&valid, self.raw()) };
             for (lane, hit) in hits.iter_mut().enumerate() {
                 let (geom_id, t, ng, prim_id, u, v) = packet.lane(lane);
-                *hit = if valid.0[lane] == 0 || geom_id == sys::RTC_INVALID_GEOMETRY_ID {
+                *hit = if valid.0[lane] == 0 {
                     None
                 } else {
-                    Some(Hit {
-                        t,
-                        ng: ng.normalize_or_zero(),
-                        geom_id,
-                        prim_id,
-                        u,
-                        v,
-                        material: self.material(geom_id).unwrap_or(u32::MAX),
-                    })
+                    self.hit(geom_id, t, ng, prim_id, u, v)
                 };
             }
         }

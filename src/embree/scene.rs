@@ -352,17 +352,34 @@ impl CommittedScene {
     /// Converts Embree's answer for one ray.
     #[inline]
     fn hit_from(&self, ray: &sys::RTCRay, hit: &sys::RTCHit) -> Option<Hit> {
-        if hit.geomID == sys::RTC_INVALID_GEOMETRY_ID {
+        let ng = Vec3::new(hit.Ng_x, hit.Ng_y, hit.Ng_z);
+        self.hit(hit.geomID, ray.tfar, ng, hit.primID, hit.u, hit.v)
+    }
+
+    /// The [`Hit`] Embree reported (`None` for a miss): the one conversion
+    /// behind single rays and packets alike, `ng` unnormalised as Embree
+    /// gives it.
+    #[inline]
+    pub(super) fn hit(
+        &self,
+        geom_id: u32,
+        t: f32,
+        ng: Vec3,
+        prim_id: u32,
+        u: f32,
+        v: f32,
+    ) -> Option<Hit> {
+        if geom_id == sys::RTC_INVALID_GEOMETRY_ID {
             return None;
         }
         Some(Hit {
-            t: ray.tfar,
-            ng: Vec3::new(hit.Ng_x, hit.Ng_y, hit.Ng_z).normalize_or_zero(),
-            geom_id: hit.geomID,
-            prim_id: hit.primID,
-            u: hit.u,
-            v: hit.v,
-            material: self.material(hit.geomID).unwrap_or(u32::MAX),
+            t,
+            ng: ng.normalize_or_zero(),
+            geom_id,
+            prim_id,
+            u,
+            v,
+            material: self.material(geom_id).unwrap_or(u32::MAX),
         })
     }
 

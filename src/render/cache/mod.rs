@@ -100,7 +100,7 @@ pub const LEVELS: u32 = 5;
 /// How to build a cache.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CacheConfig {
-    /// One irradiance sample per `stride` photons (>= 1).
+    /// One irradiance sample per `stride` photons ([`MIN_STRIDE`] and up).
     pub stride: u32,
     /// Photons per irradiance estimate and the largest radius.
     pub lookup: Lookup,
