@@ -20,6 +20,7 @@
 //! `PARALLEL_MIN` (subtrees smaller than this are built on one thread).
 
 use super::photon::{CompactPhoton, Quantizer};
+use super::stems;
 use super::PhotonRecord;
 use crate::rng::{hash2, mix64};
 use glam::Vec3;
@@ -40,6 +41,8 @@ pub struct PhotonMap {
     pub(crate) quant: Quantizer,
     /// Smallest and largest grid coordinate per axis (see [`grid_bounds`]).
     pub(crate) bounds: [[f32; 3]; 2],
+    /// The inner nodes' split planes, breadth-first ([`super::stems`]).
+    pub(crate) stems: Vec<u32>,
     skipped: usize,
 }
 
@@ -109,6 +112,7 @@ impl PhotonMap {
         build_subtree(&mut photons);
         PhotonMap {
             bounds: grid_bounds(&photons),
+            stems: stems::build(&photons),
             photons,
             quant,
             skipped,
@@ -139,6 +143,7 @@ impl PhotonMap {
         build_subtree(&mut photons);
         PhotonMap {
             bounds: grid_bounds(&photons),
+            stems: stems::build(&photons),
             photons,
             quant,
             skipped: 0,
@@ -201,9 +206,12 @@ impl PhotonMap {
         std::mem::size_of::<CompactPhoton>()
     }
 
-    /// Bytes the map holds (its allocated photon array plus the struct itself).
+    /// Bytes the map holds: its allocated photon array, the split planes of
+    /// its inner nodes (under 0.33 byte a photon) and the struct itself.
     pub fn memory_bytes(&self) -> usize {
-        self.photons.capacity() * std::mem::size_of::<CompactPhoton>() + std::mem::size_of::<Self>()
+        self.photons.capacity() * std::mem::size_of::<CompactPhoton>()
+            + self.stems.capacity() * std::mem::size_of::<u32>()
+            + std::mem::size_of::<Self>()
     }
 
     /// A hash of the compact photons in tree order and of the quantisation frame:

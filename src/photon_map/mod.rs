@@ -18,6 +18,7 @@ pub mod grid;
 pub mod kdtree;
 pub mod photon;
 pub mod query;
+mod stems;
 
 pub use density::{
     density_at, density_at_facing, density_stats, density_stats_where, DensityStats,

@@ -16,6 +16,7 @@
 
 use super::kdtree::{PhotonMap, LEAF_SIZE};
 use super::photon::CompactPhoton;
+use super::stems;
 use super::Neighbor;
 use glam::Vec3;
 
@@ -64,6 +65,7 @@ impl PhotonMap {
         let r = self.quant.grid_length(max_radius);
         let mut search = Knn {
             q: self.quant.grid_point(p),
+            stems: &self.stems,
             k,
             r2: (r * r).min(f32::MAX as f64) as f32,
             heap: out,
@@ -73,7 +75,7 @@ impl PhotonMap {
             search.r2 = f32::INFINITY;
         }
         let off = self.root_gap(&search.q);
-        search.visit(&self.photons, 0, off);
+        search.visit(&self.photons, 0, off, 0);
         sort_neighbors(out);
         for n in out.iter_mut() {
             n.dist2 = self.quant.world_dist2(n.dist2);
@@ -90,6 +92,7 @@ impl PhotonMap {
         let r = self.quant.grid_length(radius);
         let mut search = Within {
             q: self.quant.grid_point(p),
+            stems: &self.stems,
             r2: if radius == f32::INFINITY {
                 f32::INFINITY
             } else {
@@ -98,7 +101,7 @@ impl PhotonMap {
             out,
         };
         let off = self.root_gap(&search.q);
-        search.visit(&self.photons, 0, off);
+        search.visit(&self.photons, 0, off, 0);
         for n in out.iter_mut() {
             n.dist2 = self.quant.world_dist2(n.dist2);
         }
@@ -182,12 +185,20 @@ pub(crate) fn heap_insert(heap: &mut Vec<Neighbor>, k: usize, n: Neighbor) {
 
 /// Sorts a finished k-nearest result by distance, then index.
 pub(crate) fn sort_neighbors(out: &mut [Neighbor]) {
-    out.sort_unstable_by(|a, b| a.dist2.total_cmp(&b.dist2).then(a.index.cmp(&b.index)));
+    // One integer key in the order of `(dist2.total_cmp, index)`: a sort of
+    // plain u64s, about twice as fast as comparing floats and then indices.
+    out.sort_unstable_by_key(|n| {
+        let bits = n.dist2.to_bits();
+        // `total_cmp`'s order as unsigned integers: negative values flipped.
+        let ordered = bits ^ (((bits as i32 >> 31) as u32) | 1 << 31);
+        u64::from(ordered) << 32 | u64::from(n.index)
+    });
 }
 
 /// k-nearest search state; `heap` is a max-heap on `dist2` (grid units) while searching.
 struct Knn<'a, F> {
     q: [f32; 3],
+    stems: &'a [u32],
     k: usize,
     r2: f32,
     heap: &'a mut Vec<Neighbor>,
@@ -221,9 +232,10 @@ impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
         heap_insert(self.heap, self.k, n);
     }
 
-    /// Searches the subtree `photons` (which starts at `base` in the map); `off` are
-    /// the per-axis gaps from the query point to the subtree's region.
-    fn visit(&mut self, photons: &[CompactPhoton], base: usize, mut off: [f32; 3]) {
+    /// Searches the subtree `photons` (which starts at `base` in the map, and
+    /// whose inner node, if any, is stem `node`); `off` are the per-axis gaps
+    /// from the query point to the subtree's region.
+    fn visit(&mut self, photons: &[CompactPhoton], base: usize, mut off: [f32; 3], node: usize) {
         let n = photons.len();
         if n <= LEAF_SIZE {
             // Distances first, in a loop the compiler can vectorise; then the heap.
@@ -242,22 +254,25 @@ impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
             return;
         }
         let mid = n / 2;
-        let node = &photons[mid];
-        let axis = node.axis();
-        let d = self.q[axis] - node.coord(axis) as f32;
+        let (axis, split) = stems::split(self.stems[node]);
+        let d = self.q[axis] - split as f32;
         let (left, right) = (&photons[..mid], &photons[mid + 1..]);
         if d < 0.0 {
-            self.visit(left, base, off);
+            self.visit(left, base, off, 2 * node + 1);
         } else {
-            self.visit(right, base + mid + 1, off);
+            self.visit(right, base + mid + 1, off, 2 * node + 2);
         }
-        self.consider(base + mid, node);
+        // The node photon is at least |d| away (its distance adds squares to
+        // d * d, rounding up or not at all): read it only if that could enter.
+        if self.may_enter(d * d) {
+            self.consider(base + mid, &photons[mid]);
+        }
         off[axis] = d.abs();
         if self.may_enter(gap2(&off)) {
             if d < 0.0 {
-                self.visit(right, base + mid + 1, off);
+                self.visit(right, base + mid + 1, off, 2 * node + 2);
             } else {
-                self.visit(left, base, off);
+                self.visit(left, base, off, 2 * node + 1);
             }
         }
     }
@@ -266,6 +281,7 @@ impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
 /// Fixed-radius search state (grid units while searching).
 struct Within<'a> {
     q: [f32; 3],
+    stems: &'a [u32],
     r2: f32,
     out: &'a mut Vec<Neighbor>,
 }
@@ -282,7 +298,7 @@ impl Within<'_> {
         }
     }
 
-    fn visit(&mut self, photons: &[CompactPhoton], base: usize, mut off: [f32; 3]) {
+    fn visit(&mut self, photons: &[CompactPhoton], base: usize, mut off: [f32; 3], node: usize) {
         let n = photons.len();
         if n <= LEAF_SIZE {
             for (i, p) in photons.iter().enumerate() {
@@ -291,20 +307,36 @@ impl Within<'_> {
             return;
         }
         let mid = n / 2;
-        let node = &photons[mid];
-        let axis = node.axis();
-        let d = self.q[axis] - node.coord(axis) as f32;
+        let (axis, split) = stems::split(self.stems[node]);
+        let d = self.q[axis] - split as f32;
         let (left, right) = (&photons[..mid], &photons[mid + 1..]);
-        let (near, near_base, far, far_base) = if d < 0.0 {
-            (left, base, right, base + mid + 1)
+        let (near, near_base, near_node, far, far_base, far_node) = if d < 0.0 {
+            (
+                left,
+                base,
+                2 * node + 1,
+                right,
+                base + mid + 1,
+                2 * node + 2,
+            )
         } else {
-            (right, base + mid + 1, left, base)
+            (
+                right,
+                base + mid + 1,
+                2 * node + 2,
+                left,
+                base,
+                2 * node + 1,
+            )
         };
-        self.visit(near, near_base, off);
-        self.consider(base + mid, node);
+        self.visit(near, near_base, off, near_node);
+        // As for k nearest: the node photon is at least |d| away.
+        if d * d <= self.r2 {
+            self.consider(base + mid, &photons[mid]);
+        }
         off[axis] = d.abs();
         if gap2(&off) <= self.r2 {
-            self.visit(far, far_base, off);
+            self.visit(far, far_base, off, far_node);
         }
     }
 }
