@@ -1,0 +1,161 @@
+//! The kd-tree against kiddo 6, in rounds that alternate the two sides in one
+//! process: on a shared or virtual machine both speeds drift by tens of
+//! percent from minute to minute, so criterion's medians, taken one side
+//! after the other, can differ by more than the two trees do. A ratio taken
+//! within one round, and the median over the rounds, drifts much less.
+//!
+//! Each round times, on one thread: builds of 1e4, 1e5 and 1e6 uniform random
+//! photons (ours in place from compact photons, as the tracer hands them over;
+//! kiddo's `ImmutableKdTree<f32, 3>` from `[f32; 3]`, as in `benches/kdtree.rs`),
+//! then 2000 k = 50 and radius queries (about 50 found) in the 1M map.
+//!
+//! `cargo run --release --example kdtree_vs_kiddo -- [ROUNDS]` (default 7)
+//! prints each round's times and ratios (ours / kiddo: below 1, ours is
+//! faster) and the median ratio of each row.
+
+use adaptive_pm::photon_map::{CompactPhoton, PhotonMap, PhotonRecord, Quantizer};
+use adaptive_pm::rng::Rng;
+use glam::Vec3;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use std::hint::black_box;
+use std::num::NonZero;
+use std::time::Instant;
+
+type Kiddo = ImmutableKdTree<f32, 3>;
+const K: usize = 50;
+const QUERIES: usize = 2000;
+
+fn records(n: usize, seed: u64) -> Vec<PhotonRecord> {
+    let mut rng = Rng::new(seed);
+    (0..n)
+        .map(|_| PhotonRecord {
+            position: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
+            power: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
+            direction: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5,
+            depth: (rng.next_u32() % 4) as u8,
+        })
+        .collect()
+}
+
+/// Seconds per run of `f`, the best of as many runs as fit in about 0.3 s.
+fn time<T>(mut f: impl FnMut() -> T) -> f64 {
+    time_with(|| (), |()| f())
+}
+
+/// Seconds per run of `f` on a fresh `setup()` (not timed), the best of as
+/// many runs as fit in about 0.3 s.
+fn time_with<I, T>(mut setup: impl FnMut() -> I, mut f: impl FnMut(I) -> T) -> f64 {
+    let mut best = f64::INFINITY;
+    let start = Instant::now();
+    let mut runs = 0;
+    while runs < 3 || (start.elapsed().as_secs_f64() < 0.3 && runs < 1000) {
+        let input = setup();
+        let t = Instant::now();
+        black_box(f(input));
+        best = best.min(t.elapsed().as_secs_f64());
+        runs += 1;
+    }
+    best
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let rounds: usize = match std::env::args().nth(1) {
+        None => 7,
+        Some(s) => s.parse().unwrap_or_else(|_| {
+            eprintln!("ROUNDS: {s:?} is not a number");
+            std::process::exit(2)
+        }),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread pool");
+    let frame = Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0);
+    let sets: Vec<(String, Vec<CompactPhoton>, Vec<[f32; 3]>)> = [10_000, 100_000, 1_000_000]
+        .iter()
+        .map(|&n| {
+            let recs = records(n, 1);
+            let compact = recs.iter().map(|r| frame.encode(r)).collect();
+            let points = recs.iter().map(|r| r.position.to_array()).collect();
+            (format!("build {}k", n / 1000), compact, points)
+        })
+        .collect();
+    let (_, big_compact, big_points) = &sets[2];
+    let map = PhotonMap::from_compact(big_compact.clone(), frame);
+    let tree = Kiddo::new_from_slice(big_points).expect("kiddo builds");
+    let queries: Vec<Vec3> = records(QUERIES, 2).iter().map(|r| r.position).collect();
+    let radius = (K as f32 * 3.0 / (4.0 * std::f32::consts::PI * 1e6)).cbrt();
+    let k = NonZero::new(K).expect("K > 0");
+
+    let mut rows: Vec<(String, Vec<f64>)> = Vec::new();
+    for round in 0..rounds {
+        let mut line = Vec::new();
+        for (label, compact, points) in &sets {
+            let ours = pool.install(|| {
+                time_with(|| compact.clone(), |c| PhotonMap::from_compact(c, frame))
+            });
+            let theirs = pool.install(|| time(|| Kiddo::new_from_slice(points).map(|t| t.size())));
+            line.push((label.clone(), ours, theirs));
+        }
+        let mut out = Vec::with_capacity(K);
+        let ours = time(|| {
+            queries.iter().fold(0.0, |acc, &q| {
+                map.nearest_k(q, K, f32::INFINITY, &mut out);
+                acc + out[K - 1].dist2
+            })
+        });
+        let theirs = time(|| {
+            queries.iter().fold(0.0, |acc, q| {
+                let res = tree
+                    .query(&q.to_array())
+                    .nearest_n::<SquaredEuclidean<f32>>(k)
+                    .execute();
+                acc + res[K - 1].distance
+            })
+        });
+        line.push(("2000 queries k = 50 in 1M".into(), ours, theirs));
+        let ours = time(|| {
+            queries.iter().fold(0, |acc, &q| {
+                map.within_radius(q, radius, &mut out);
+                acc + out.len()
+            })
+        });
+        let theirs = time(|| {
+            queries.iter().fold(0, |acc, q| {
+                let res = tree
+                    .query(&q.to_array())
+                    .within::<SquaredEuclidean<f32>>(radius * radius)
+                    .unsorted()
+                    .execute();
+                acc + res.len()
+            })
+        });
+        line.push(("2000 radius queries (~50 found) in 1M".into(), ours, theirs));
+        println!("round {round}");
+        for (i, (label, ours, theirs)) in line.into_iter().enumerate() {
+            println!(
+                "  {label:<40} ours {:>9.3} ms  kiddo {:>9.3} ms  {:.2}",
+                ours * 1e3,
+                theirs * 1e3,
+                ours / theirs
+            );
+            if rows.len() <= i {
+                rows.push((label, Vec::new()));
+            }
+            rows[i].1.push(ours / theirs);
+        }
+    }
+    println!("\n| one thread | ours / kiddo, median of {rounds} rounds | range |");
+    println!("|---|---|---|");
+    for (label, ratios) in rows {
+        let (lo, hi) = ratios
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &r| (a.min(r), b.max(r)));
+        println!("| {label} | {:.2} | {lo:.2}–{hi:.2} |", median(ratios));
+    }
+}
