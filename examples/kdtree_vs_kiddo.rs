@@ -96,9 +96,8 @@ fn main() {
     for round in 0..rounds {
         let mut line = Vec::new();
         for (label, compact, points) in &sets {
-            let ours = pool.install(|| {
-                time_with(|| compact.clone(), |c| PhotonMap::from_compact(c, frame))
-            });
+            let ours = pool
+                .install(|| time_with(|| compact.clone(), |c| PhotonMap::from_compact(c, frame)));
             let theirs = pool.install(|| time(|| Kiddo::new_from_slice(points).map(|t| t.size())));
             line.push((label.clone(), ours, theirs));
         }

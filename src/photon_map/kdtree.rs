@@ -281,17 +281,20 @@ fn build_subtree(photons: &mut [CompactPhoton]) {
 
 /// The axis along which the photons' bounding box is longest (ties: lowest axis).
 fn widest_axis(photons: &[CompactPhoton]) -> usize {
+    // Each coordinate's extremes on its field of the packed word, masked in
+    // place (a field's order is its coordinate's): no shifts per photon.
+    let masks = [0, 1, 2].map(CompactPhoton::coord_mask);
     let (lo, hi) = photons
         .iter()
-        .fold(([u32::MAX; 3], [0u32; 3]), |(mut lo, mut hi), p| {
-            let g = p.grid();
+        .fold(([u64::MAX; 3], [0u64; 3]), |(mut lo, mut hi), p| {
+            let pos = p.packed_position();
             for a in 0..3 {
-                lo[a] = lo[a].min(g[a]);
-                hi[a] = hi[a].max(g[a]);
+                lo[a] = lo[a].min(pos & masks[a]);
+                hi[a] = hi[a].max(pos & masks[a]);
             }
             (lo, hi)
         });
-    let ext = [0, 1, 2].map(|a| hi[a] - lo[a]);
+    let ext = [0, 1, 2].map(|a| CompactPhoton::field_value(hi[a] - lo[a], a));
     if ext[0] >= ext[1] && ext[0] >= ext[2] {
         0
     } else if ext[1] >= ext[2] {

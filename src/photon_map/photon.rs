@@ -88,6 +88,24 @@ impl CompactPhoton {
         ((self.pos >> (axis as u32 * POSITION_BITS)) & POSITION_MASK) as u32
     }
 
+    /// The packed position word (coordinate `a` in bits `21 a .. 21 a + 21`).
+    #[inline(always)]
+    pub(crate) fn packed_position(&self) -> u64 {
+        self.pos
+    }
+
+    /// The bits of coordinate `axis` in [`CompactPhoton::packed_position`].
+    #[inline(always)]
+    pub(crate) const fn coord_mask(axis: usize) -> u64 {
+        POSITION_MASK << (axis as u32 * POSITION_BITS)
+    }
+
+    /// A difference of two masked fields of `axis`, in grid steps.
+    #[inline(always)]
+    pub(crate) fn field_value(field: u64, axis: usize) -> u32 {
+        (field >> (axis as u32 * POSITION_BITS)) as u32
+    }
+
     /// A hash of what the photon carries (position, power, direction, depth),
     /// not of where the tree put it (its split axis is left out): the same
     /// photon gives the same value in any map built from it. Used as a coin

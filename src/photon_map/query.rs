@@ -438,7 +438,11 @@ mod tests {
             .collect();
         let map = PhotonMap::build(&records);
         let mut out = Vec::new();
-        for p in [Vec3::new(2.0, 3.0, 1.0), Vec3::new(0.5, 5.0, 2.5), Vec3::splat(9.0)] {
+        for p in [
+            Vec3::new(2.0, 3.0, 1.0),
+            Vec3::new(0.5, 5.0, 2.5),
+            Vec3::splat(9.0),
+        ] {
             for k in [1, 7, 50, SORTED_MAX_K, SORTED_MAX_K + 1, 400, 3000] {
                 map.nearest_k(p, k, f32::INFINITY, &mut out);
                 let got: Vec<u32> = out.iter().map(|n| n.index).collect();
