@@ -23,9 +23,8 @@ use glam::Vec3;
 impl PhotonMap {
     /// The (at most) `k` photons nearest to `p` within `max_radius` (inclusive),
     /// written to `out` (cleared first) **sorted by increasing distance** (ties by
-    /// index): the first `k` in that order. Distances are compared as the
-    /// search computes them, in grid units, so of photons whose world distances
-    /// differ by less than the quantisation, either may be kept.
+    /// index). Among photons at exactly the k-th distance, which are kept is
+    /// deterministic but not specified.
     pub fn nearest_k(&self, p: Vec3, k: usize, max_radius: f32, out: &mut Vec<Neighbor>) {
         self.nearest_k_where(p, k, max_radius, out, |_| true);
     }
@@ -69,8 +68,7 @@ impl PhotonMap {
             stems: &self.stems,
             k,
             r2: (r * r).min(f32::MAX as f64) as f32,
-            best: out,
-            sorted: k <= SORTED_MAX_K,
+            heap: out,
             accept,
         };
         if max_radius == f32::INFINITY {
@@ -78,9 +76,7 @@ impl PhotonMap {
         }
         let off = self.root_gap(&search.q);
         search.visit(&self.photons, 0, off, 0);
-        if !search.sorted {
-            sort_neighbors(search.best);
-        }
+        sort_neighbors(out);
         for n in out.iter_mut() {
             n.dist2 = self.quant.world_dist2(n.dist2);
         }
@@ -151,23 +147,12 @@ fn gap2(off: &[f32; 3]) -> f32 {
 /// the heap is not full, else it replaces the farthest (the caller checks that `n` is
 /// nearer than it).
 pub(crate) fn heap_insert(heap: &mut Vec<Neighbor>, k: usize, n: Neighbor) {
-    heap_insert_by(heap, k, n, |n| n.dist2);
-}
-
-/// [`heap_insert`] on any key (a max-heap on `key`).
-fn heap_insert_by<T: PartialOrd>(
-    heap: &mut Vec<Neighbor>,
-    k: usize,
-    n: Neighbor,
-    key: impl Fn(&Neighbor) -> T,
-) {
-    let nk = key(&n);
     if heap.len() < k {
         heap.push(n);
         let mut i = heap.len() - 1;
         while i > 0 {
             let parent = (i - 1) / 2;
-            if key(&heap[parent]) >= nk {
+            if heap[parent].dist2 >= n.dist2 {
                 break;
             }
             heap[i] = heap[parent];
@@ -183,12 +168,12 @@ fn heap_insert_by<T: PartialOrd>(
                 break;
             }
             let r = l + 1;
-            let c = if r < len && key(&heap[r]) > key(&heap[l]) {
+            let c = if r < len && heap[r].dist2 > heap[l].dist2 {
                 r
             } else {
                 l
             };
-            if key(&heap[c]) <= nk {
+            if heap[c].dist2 <= n.dist2 {
                 break;
             }
             heap[i] = heap[c];
@@ -198,61 +183,36 @@ fn heap_insert_by<T: PartialOrd>(
     }
 }
 
-/// A neighbor's place in the order of results, `(dist2, index)`, as one
-/// integer (`dist2` as `total_cmp` orders it).
-#[inline(always)]
-fn rank(n: &Neighbor) -> u64 {
-    let bits = n.dist2.to_bits();
-    // `total_cmp`'s order as unsigned integers: negative values flipped.
-    let ordered = bits ^ (((bits as i32 >> 31) as u32) | 1 << 31);
-    u64::from(ordered) << 32 | u64::from(n.index)
-}
-
 /// Sorts a finished k-nearest result by distance, then index.
 pub(crate) fn sort_neighbors(out: &mut [Neighbor]) {
-    // One integer key: a sort of plain u64s, faster than comparing floats
-    // and then indices.
-    out.sort_unstable_by_key(rank);
+    // One integer key in the order of `(dist2.total_cmp, index)`: a sort of
+    // plain u64s, about twice as fast as comparing floats and then indices.
+    out.sort_unstable_by_key(|n| {
+        let bits = n.dist2.to_bits();
+        // `total_cmp`'s order as unsigned integers: negative values flipped.
+        let ordered = bits ^ (((bits as i32 >> 31) as u32) | 1 << 31);
+        u64::from(ordered) << 32 | u64::from(n.index)
+    });
 }
 
-/// Up to this `k`, a k-nearest search keeps its result sorted as it goes (an
-/// insertion moves at most `k` 8-byte entries, and no sort is left at the
-/// end); above it, a heap (logarithmic insertion) sorted at the end.
-const SORTED_MAX_K: usize = 128;
-
-/// k-nearest search state. `best` holds the first (at most) `k` photons found
-/// so far in the order of [`rank`]: sorted when `k <= SORTED_MAX_K`, else a
-/// max-heap on it.
+/// k-nearest search state; `heap` is a max-heap on `dist2` (grid units) while searching.
 struct Knn<'a, F> {
     q: [f32; 3],
     stems: &'a [u32],
     k: usize,
     r2: f32,
-    best: &'a mut Vec<Neighbor>,
-    sorted: bool,
+    heap: &'a mut Vec<Neighbor>,
     accept: F,
 }
 
 impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
-    /// The last result in rank order, once there are `k`.
-    #[inline(always)]
-    fn worst(&self) -> Option<&Neighbor> {
-        if self.best.len() < self.k {
-            None
-        } else if self.sorted {
-            self.best.last()
-        } else {
-            self.best.first()
-        }
-    }
-
-    /// Whether a region at squared gap `g2` may hold a photon that enters the
-    /// result (at the worst's distance, one of a lower index would).
+    /// Whether a region at squared gap `g2` may hold a photon that enters the result.
     #[inline(always)]
     fn may_enter(&self, g2: f32) -> bool {
-        match self.worst() {
-            Some(w) => g2 <= w.dist2,
-            None => g2 <= self.r2,
+        if self.heap.len() == self.k {
+            g2 < self.heap[0].dist2
+        } else {
+            g2 <= self.r2
         }
     }
 
@@ -267,29 +227,9 @@ impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
         }
     }
 
-    /// Adds `n` if it ranks before the worst result (or there are fewer than `k`).
     #[inline]
     fn insert(&mut self, n: Neighbor) {
-        let r = rank(&n);
-        if self.worst().is_some_and(|w| rank(w) <= r) {
-            return;
-        }
-        if self.sorted {
-            // An insertion sort's step from the end: cheaper than a binary
-            // search and a move for the few dozen entries this holds.
-            if self.best.len() < self.k {
-                self.best.push(n);
-            }
-            let best = &mut self.best[..];
-            let mut i = best.len() - 1;
-            while i > 0 && rank(&best[i - 1]) > r {
-                best[i] = best[i - 1];
-                i -= 1;
-            }
-            best[i] = n;
-        } else {
-            heap_insert_by(self.best, self.k, n, rank);
-        }
+        heap_insert(self.heap, self.k, n);
     }
 
     /// Searches the subtree `photons` (which starts at `base` in the map, and
@@ -397,57 +337,6 @@ impl Within<'_> {
         off[axis] = d.abs();
         if gap2(&off) <= self.r2 {
             self.visit(far, far_base, off, far_node);
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::photon_map::PhotonRecord;
-    use crate::rng::Rng;
-
-    /// The first `k` photons in (grid distance, index) order, by brute force.
-    fn first_k(map: &PhotonMap, p: Vec3, k: usize) -> Vec<u32> {
-        let q = map.quant.grid_point(p);
-        let mut all: Vec<Neighbor> = (0..map.len())
-            .map(|i| Neighbor {
-                index: i as u32,
-                dist2: dist2(&q, &map.photons[i]),
-            })
-            .collect();
-        sort_neighbors(&mut all);
-        all.iter().take(k).map(|n| n.index).collect()
-    }
-
-    #[test]
-    fn ties_are_broken_by_index_for_small_and_large_k() {
-        // A coarse lattice: many photons at equal distances from a lattice point.
-        let mut rng = Rng::new(3);
-        let records: Vec<PhotonRecord> = (0..3000)
-            .map(|_| PhotonRecord {
-                position: Vec3::new(
-                    (rng.next_f32() * 6.0).floor(),
-                    (rng.next_f32() * 6.0).floor(),
-                    (rng.next_f32() * 6.0).floor(),
-                ),
-                power: Vec3::ONE,
-                direction: Vec3::Z,
-                depth: 0,
-            })
-            .collect();
-        let map = PhotonMap::build(&records);
-        let mut out = Vec::new();
-        for p in [
-            Vec3::new(2.0, 3.0, 1.0),
-            Vec3::new(0.5, 5.0, 2.5),
-            Vec3::splat(9.0),
-        ] {
-            for k in [1, 7, 50, SORTED_MAX_K, SORTED_MAX_K + 1, 400, 3000] {
-                map.nearest_k(p, k, f32::INFINITY, &mut out);
-                let got: Vec<u32> = out.iter().map(|n| n.index).collect();
-                assert_eq!(got, first_k(&map, p, k), "p {p} k {k}");
-            }
         }
     }
 }
