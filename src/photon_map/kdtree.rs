@@ -109,9 +109,9 @@ impl PhotonMap {
             photons.len() <= u32::MAX as usize,
             "a photon map holds at most u32::MAX photons"
         );
-        build_subtree(&mut photons);
+        let bounds = build_tree(&mut photons);
         PhotonMap {
-            bounds: grid_bounds(&photons),
+            bounds,
             stems: stems::build(&photons),
             photons,
             quant,
@@ -140,9 +140,9 @@ impl PhotonMap {
                 .with_min_len(4096)
                 .for_each(|p| p.set_axis(0));
         }
-        build_subtree(&mut photons);
+        let bounds = build_tree(&mut photons);
         PhotonMap {
-            bounds: grid_bounds(&photons),
+            bounds,
             stems: stems::build(&photons),
             photons,
             quant,
@@ -225,30 +225,62 @@ impl PhotonMap {
     }
 }
 
-/// The photons' bounding box in grid units. Queries start from the gap to it:
-/// the split planes alone bound only the axes split on, and a map of one plane
-/// (a floor's caustic) is never split across it, so a query far off that plane
-/// would otherwise visit every leaf.
-fn grid_bounds(photons: &[CompactPhoton]) -> [[f32; 3]; 2] {
-    let empty = || ([u32::MAX; 3], [0u32; 3]);
-    let (lo, hi) = photons
-        .par_iter()
-        .with_min_len(PARALLEL_MIN)
-        .fold(empty, |(lo, hi), p| {
-            let g = p.grid();
-            (
-                [0, 1, 2].map(|a| lo[a].min(g[a])),
-                [0, 1, 2].map(|a| hi[a].max(g[a])),
-            )
-        })
-        .reduce(empty, |a, b| {
+/// Each axis's smallest and largest coordinate field of the photons'
+/// packed positions, masked in place (a field orders as its coordinate).
+type FieldBounds = ([u64; 3], [u64; 3]);
+
+const NO_BOUNDS: FieldBounds = ([u64::MAX; 3], [0; 3]);
+
+fn field_bounds(photons: &[CompactPhoton]) -> FieldBounds {
+    // No shifts per photon: the fields are compared where they lie.
+    let masks = [0, 1, 2].map(CompactPhoton::coord_mask);
+    photons.iter().fold(NO_BOUNDS, |(mut lo, mut hi), p| {
+        let pos = p.packed_position();
+        for a in 0..3 {
+            lo[a] = lo[a].min(pos & masks[a]);
+            hi[a] = hi[a].max(pos & masks[a]);
+        }
+        (lo, hi)
+    })
+}
+
+/// [`field_bounds`] in parallel chunks (min and max: the same in any order).
+fn field_bounds_par(photons: &[CompactPhoton]) -> FieldBounds {
+    if photons.len() < PARALLEL_MIN {
+        return field_bounds(photons);
+    }
+    photons.par_chunks(PARALLEL_MIN).map(field_bounds).reduce(
+        || NO_BOUNDS,
+        |a, b| {
             (
                 [0, 1, 2].map(|i| a.0[i].min(b.0[i])),
                 [0, 1, 2].map(|i| a.1[i].max(b.1[i])),
             )
-        });
-    // The same conversion as a photon's distance (`query::dist2`).
-    [lo.map(|v| v as i32 as f32), hi.map(|v| v as i32 as f32)]
+        },
+    )
+}
+
+/// The photons' bounding box in grid units. Queries start from the gap to it:
+/// the split planes alone bound only the axes split on, and a map of one plane
+/// (a floor's caustic) is never split across it, so a query far off that plane
+/// would otherwise visit every leaf.
+fn grid_bounds(b: &FieldBounds) -> [[f32; 3]; 2] {
+    // The same conversion as a photon's distance (`query::dist2`); an empty
+    // map keeps the sentinel an empty fold gives.
+    let coord = |field: u64, a: usize| {
+        if field == u64::MAX {
+            u32::MAX
+        } else {
+            CompactPhoton::field_value(field, a)
+        }
+    };
+    let (lo, hi) = b;
+    [0, 1].map(|side| {
+        [0, 1, 2].map(|a| {
+            let field = if side == 0 { lo[a] } else { hi[a] };
+            coord(field, a) as i32 as f32
+        })
+    })
 }
 
 fn is_valid(r: &PhotonRecord) -> bool {
@@ -258,42 +290,53 @@ fn is_valid(r: &PhotonRecord) -> bool {
         && r.direction != Vec3::ZERO
 }
 
-/// Turns `photons` into its kd-tree in place (see the module docs for the layout).
-fn build_subtree(photons: &mut [CompactPhoton]) {
+/// Turns `photons` into its kd-tree in place (see the module docs for the
+/// layout) and returns their bounding box in grid units. The root's widest-axis
+/// pass is that box's, done once and in parallel.
+fn build_tree(photons: &mut [CompactPhoton]) -> [[f32; 3]; 2] {
+    let bounds = field_bounds_par(photons);
+    build_subtree(photons, Some(bounds));
+    grid_bounds(&bounds)
+}
+
+/// [`build_tree`] of a subtree, whose field bounds are known or not.
+fn build_subtree(photons: &mut [CompactPhoton], bounds: Option<FieldBounds>) {
     let n = photons.len();
     if n <= LEAF_SIZE {
-        photons.sort_unstable_by_key(|p| p.bits());
+        // By all 16 bytes, position first; a tie on it (rare) behind a branch.
+        photons.sort_unstable_by(|a, b| {
+            let (a, b) = (a.bits(), b.bits());
+            if a.0 != b.0 {
+                a.0.cmp(&b.0)
+            } else {
+                a.1.cmp(&b.1)
+            }
+        });
         return;
     }
-    let axis = widest_axis(photons);
+    let axis = widest_axis(&bounds.unwrap_or_else(|| field_bounds(photons)));
     let mid = n / 2;
-    photons.select_nth_unstable_by(mid, |a, b| a.cmp_on(b, axis));
+    // Only "less" matters to the selection (equal means bitwise equal).
+    photons.select_nth_unstable_by(mid, |a, b| {
+        if a.less_on(b, axis) {
+            std::cmp::Ordering::Less
+        } else {
+            std::cmp::Ordering::Greater
+        }
+    });
     photons[mid].set_axis(axis);
     let (left, rest) = photons.split_at_mut(mid);
     let right = &mut rest[1..];
     if n >= PARALLEL_MIN {
-        rayon::join(|| build_subtree(left), || build_subtree(right));
+        rayon::join(|| build_subtree(left, None), || build_subtree(right, None));
     } else {
-        build_subtree(left);
-        build_subtree(right);
+        build_subtree(left, None);
+        build_subtree(right, None);
     }
 }
 
 /// The axis along which the photons' bounding box is longest (ties: lowest axis).
-fn widest_axis(photons: &[CompactPhoton]) -> usize {
-    // Each coordinate's extremes on its field of the packed word, masked in
-    // place (a field's order is its coordinate's): no shifts per photon.
-    let masks = [0, 1, 2].map(CompactPhoton::coord_mask);
-    let (lo, hi) = photons
-        .iter()
-        .fold(([u64::MAX; 3], [0u64; 3]), |(mut lo, mut hi), p| {
-            let pos = p.packed_position();
-            for a in 0..3 {
-                lo[a] = lo[a].min(pos & masks[a]);
-                hi[a] = hi[a].max(pos & masks[a]);
-            }
-            (lo, hi)
-        });
+fn widest_axis((lo, hi): &FieldBounds) -> usize {
     let ext = [0, 1, 2].map(|a| CompactPhoton::field_value(hi[a] - lo[a], a));
     if ext[0] >= ext[1] && ext[0] >= ext[2] {
         0

@@ -178,11 +178,30 @@ impl CompactPhoton {
     /// A total order whose first key is the coordinate on `axis`, then all 16 bytes:
     /// equal means bitwise equal, which is what makes the build canonical. (Photons
     /// being partitioned have no split axis written yet, so the axis bits are 0.)
-    #[inline(always)]
+    /// The build uses its strict part, [`CompactPhoton::less_on`].
+    #[cfg(test)]
     pub(crate) fn cmp_on(&self, other: &Self, axis: usize) -> std::cmp::Ordering {
-        self.coord(axis)
-            .cmp(&other.coord(axis))
+        // The coordinate's field masked in place orders as the coordinate.
+        let mask = Self::coord_mask(axis);
+        (self.pos & mask)
+            .cmp(&(other.pos & mask))
             .then_with(|| self.bits().cmp(&other.bits()))
+    }
+
+    /// Whether `self` comes before `other` in the build's total order: the
+    /// coordinate on `axis` first, then all 16 bytes (equal means bitwise
+    /// equal, which is what makes the build canonical; photons being
+    /// partitioned have no split axis written yet). The tie on the coordinate
+    /// (rare) sits behind a branch: the build's partitions call this most.
+    #[inline(always)]
+    pub(crate) fn less_on(&self, other: &Self, axis: usize) -> bool {
+        let mask = Self::coord_mask(axis);
+        let (a, b) = (self.pos & mask, other.pos & mask);
+        if a != b {
+            a < b
+        } else {
+            self.bits() < other.bits()
+        }
     }
 }
 
@@ -487,6 +506,33 @@ mod tests {
         b.set_axis(2);
         assert_eq!(b.axis(), 2);
         assert_eq!(q.decode(&b), q.decode(&q.encode(&r(0.9, 0.1))));
+    }
+
+    #[test]
+    fn less_on_is_the_strict_part_of_cmp_on() {
+        // A coarse lattice: many ties on each coordinate, some on the whole position.
+        let q = Quantizer::new(Vec3::ZERO, Vec3::splat(3.0), 1.0);
+        let mut rng = crate::rng::Rng::new(11);
+        let photons: Vec<CompactPhoton> = (0..64)
+            .map(|_| {
+                let mut c = || (rng.next_f32() * 4.0).floor();
+                let position = Vec3::new(c(), c(), c());
+                let power = Vec3::splat(1.0 + c());
+                q.encode(&PhotonRecord {
+                    position,
+                    power,
+                    direction: Vec3::Z,
+                    depth: 0,
+                })
+            })
+            .collect();
+        for a in &photons {
+            for b in &photons {
+                for axis in 0..3 {
+                    assert_eq!(a.less_on(b, axis), a.cmp_on(b, axis).is_lt());
+                }
+            }
+        }
     }
 
     #[test]
