@@ -12,6 +12,12 @@
 //! `cargo run --release --example kdtree_vs_kiddo -- [ROUNDS]` (default 7)
 //! prints each round's times and ratios (ours / kiddo: below 1, ours is
 //! faster) and the median ratio of each row.
+//!
+//! `kdtree_vs_kiddo builds ours|kiddo N COUNT` only builds COUNT trees of N
+//! photons on one thread, for counting instructions, which drift much less
+//! than times: run it under `valgrind --tool=cachegrind --cache-sim=no` with
+//! COUNT = 20 and COUNT = 0 (the setup alone) and divide the difference of
+//! the `I refs` by 20.
 
 use adaptive_pm::photon_map::{CompactPhoton, PhotonMap, PhotonRecord, Quantizer};
 use adaptive_pm::rng::Rng;
@@ -63,7 +69,47 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// `builds ours|kiddo N COUNT`: COUNT one-thread builds of N photons.
+fn builds(args: &[String]) {
+    let (Some(side), Some(Ok(n)), Some(Ok(count))) = (
+        args.first(),
+        args.get(1).map(|s| s.parse::<usize>()),
+        args.get(2).map(|s| s.parse::<usize>()),
+    ) else {
+        eprintln!("usage: kdtree_vs_kiddo builds ours|kiddo N COUNT");
+        std::process::exit(2)
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread pool");
+    let recs = records(n, 1);
+    let frame = Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0);
+    let mut size = 0;
+    if side == "ours" {
+        let compact: Vec<CompactPhoton> = recs.iter().map(|r| frame.encode(r)).collect();
+        let mut buffer = compact.clone();
+        for _ in 0..count {
+            buffer.clear();
+            buffer.extend_from_slice(&compact);
+            let map = pool.install(|| PhotonMap::from_compact(std::mem::take(&mut buffer), frame));
+            size += map.len();
+            buffer = map.into_compact().0;
+        }
+    } else {
+        let points: Vec<[f32; 3]> = recs.iter().map(|r| r.position.to_array()).collect();
+        for _ in 0..count {
+            size += pool.install(|| Kiddo::new_from_slice(&points).map_or(0, |t| t.size()));
+        }
+    }
+    println!("{count} builds of {n} photons ({side}): {size} photons in all");
+}
+
 fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("builds") {
+        return builds(&args[1..]);
+    }
     let rounds: usize = match std::env::args().nth(1) {
         None => 7,
         Some(s) => s.parse().unwrap_or_else(|_| {
