@@ -12,7 +12,6 @@
 
 use adaptive_pm::embree::thread_pool;
 use adaptive_pm::photon_map::{CompactPhoton, GrowingMap, PhotonMap, PhotonRecord, Quantizer};
-use adaptive_pm::rng::Rng;
 use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -20,22 +19,14 @@ use std::hint::black_box;
 use std::num::NonZero;
 use std::time::Duration;
 
+#[path = "common/uniform_photons.rs"]
+mod uniform_photons;
+use uniform_photons::records;
+
 type Kiddo = ImmutableKdTree<f32, 3>;
 
 const K: usize = 50;
 const QUERIES: usize = 2000;
-
-fn records(n: usize, seed: u64) -> Vec<PhotonRecord> {
-    let mut rng = Rng::new(seed);
-    (0..n)
-        .map(|_| PhotonRecord {
-            position: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
-            power: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
-            direction: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5,
-            depth: (rng.next_u32() % 4) as u8,
-        })
-        .collect()
-}
 
 fn points(records: &[PhotonRecord]) -> Vec<[f32; 3]> {
     records.iter().map(|r| r.position.to_array()).collect()

@@ -19,29 +19,20 @@
 //! COUNT = 20 and COUNT = 0 (the setup alone) and divide the difference of
 //! the `I refs` by 20.
 
-use adaptive_pm::photon_map::{CompactPhoton, PhotonMap, PhotonRecord, Quantizer};
-use adaptive_pm::rng::Rng;
+use adaptive_pm::photon_map::{CompactPhoton, PhotonMap, Quantizer};
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use std::hint::black_box;
 use std::num::NonZero;
 use std::time::Instant;
 
+#[path = "../benches/common/uniform_photons.rs"]
+mod uniform_photons;
+use uniform_photons::records;
+
 type Kiddo = ImmutableKdTree<f32, 3>;
 const K: usize = 50;
 const QUERIES: usize = 2000;
-
-fn records(n: usize, seed: u64) -> Vec<PhotonRecord> {
-    let mut rng = Rng::new(seed);
-    (0..n)
-        .map(|_| PhotonRecord {
-            position: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
-            power: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
-            direction: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5,
-            depth: (rng.next_u32() % 4) as u8,
-        })
-        .collect()
-}
 
 /// Seconds per run of `f`, the best of as many runs as fit in about 0.3 s.
 fn time<T>(mut f: impl FnMut() -> T) -> f64 {

@@ -1,0 +1,21 @@
+//! The photons the kd-tree comparisons with kiddo build and query, shared by
+//! `benches/kdtree.rs` and `examples/kdtree_vs_kiddo.rs` so that both measure
+//! the same maps.
+
+use adaptive_pm::photon_map::PhotonRecord;
+use adaptive_pm::rng::Rng;
+use glam::Vec3;
+
+/// `n` photons uniform in the unit cube, with random powers, directions and
+/// depths, from `seed`.
+pub fn records(n: usize, seed: u64) -> Vec<PhotonRecord> {
+    let mut rng = Rng::new(seed);
+    (0..n)
+        .map(|_| PhotonRecord {
+            position: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
+            power: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
+            direction: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5,
+            depth: (rng.next_u32() % 4) as u8,
+        })
+        .collect()
+}
