@@ -1,6 +1,6 @@
 //! glTF 2.0 (`.gltf` and `.glb`) to [`Scene`].
 //!
-//! - Every triangle primitive becomes a [`Mesh`] in world space (node transforms applied).
+//! - Every triangle primitive becomes a [`Mesh`](super::Mesh) in world space (node transforms applied).
 //! - A material with a non-zero `emissiveFactor` (times `KHR_materials_emissive_strength`
 //!   when present) makes its meshes area lights. Their `cos^n` exponent is the
 //!   material's `extras.cosn` (a number >= 0; absent means 0, a diffuse emitter).
