@@ -11,7 +11,7 @@
 //! photons expected within r; kiddo's unsorted form, ours unsorted too.
 
 use adaptive_pm::embree::thread_pool;
-use adaptive_pm::photon_map::{CompactPhoton, GrowingMap, PhotonMap, PhotonRecord, Quantizer};
+use adaptive_pm::photon_map::{GrowingMap, PhotonMap, PhotonRecord};
 use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -21,22 +21,12 @@ use std::time::Duration;
 
 #[path = "common/uniform_photons.rs"]
 mod uniform_photons;
-use uniform_photons::records;
+use uniform_photons::{compact, points, records};
 
 type Kiddo = ImmutableKdTree<f32, 3>;
 
 const K: usize = 50;
 const QUERIES: usize = 2000;
-
-fn points(records: &[PhotonRecord]) -> Vec<[f32; 3]> {
-    records.iter().map(|r| r.position.to_array()).collect()
-}
-
-/// The records encoded as the tracer writes them (frame: the unit cube).
-fn compact(records: &[PhotonRecord]) -> (Vec<CompactPhoton>, Quantizer) {
-    let q = Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0);
-    (records.iter().map(|r| q.encode(r)).collect(), q)
-}
 
 fn build(c: &mut Criterion) {
     let mut group = c.benchmark_group("build");

@@ -19,7 +19,8 @@
 //! COUNT = 20 and COUNT = 0 (the setup alone) and divide the difference of
 //! the `I refs` by 20.
 
-use adaptive_pm::photon_map::{CompactPhoton, PhotonMap, Quantizer};
+use adaptive_pm::embree::thread_pool;
+use adaptive_pm::photon_map::{CompactPhoton, PhotonMap};
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use std::hint::black_box;
@@ -28,7 +29,7 @@ use std::time::Instant;
 
 #[path = "../benches/common/uniform_photons.rs"]
 mod uniform_photons;
-use uniform_photons::records;
+use uniform_photons::{compact, points, records, unit_frame};
 
 type Kiddo = ImmutableKdTree<f32, 3>;
 const K: usize = 50;
@@ -70,25 +71,21 @@ fn builds(args: &[String]) {
         eprintln!("usage: kdtree_vs_kiddo builds ours|kiddo N COUNT");
         std::process::exit(2)
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("a one-thread pool");
+    let pool = thread_pool(1).expect("a one-thread pool");
     let recs = records(n, 1);
-    let frame = Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0);
     let mut size = 0;
     if side == "ours" {
-        let compact: Vec<CompactPhoton> = recs.iter().map(|r| frame.encode(r)).collect();
-        let mut buffer = compact.clone();
+        let (photons, frame) = compact(&recs);
+        let mut buffer = photons.clone();
         for _ in 0..count {
             buffer.clear();
-            buffer.extend_from_slice(&compact);
+            buffer.extend_from_slice(&photons);
             let map = pool.install(|| PhotonMap::from_compact(std::mem::take(&mut buffer), frame));
             size += map.len();
             buffer = map.into_compact().0;
         }
     } else {
-        let points: Vec<[f32; 3]> = recs.iter().map(|r| r.position.to_array()).collect();
+        let points = points(&recs);
         for _ in 0..count {
             size += pool.install(|| Kiddo::new_from_slice(&points).map_or(0, |t| t.size()));
         }
@@ -108,18 +105,17 @@ fn main() {
             std::process::exit(2)
         }),
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("a one-thread pool");
-    let frame = Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0);
+    let pool = thread_pool(1).expect("a one-thread pool");
+    let frame = unit_frame();
     let sets: Vec<(String, Vec<CompactPhoton>, Vec<[f32; 3]>)> = [10_000, 100_000, 1_000_000]
         .iter()
         .map(|&n| {
             let recs = records(n, 1);
-            let compact = recs.iter().map(|r| frame.encode(r)).collect();
-            let points = recs.iter().map(|r| r.position.to_array()).collect();
-            (format!("build {}k", n / 1000), compact, points)
+            (
+                format!("build {}k", n / 1000),
+                compact(&recs).0,
+                points(&recs),
+            )
         })
         .collect();
     let (_, big_compact, big_points) = &sets[2];

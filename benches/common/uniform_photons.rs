@@ -2,7 +2,7 @@
 //! `benches/kdtree.rs` and `examples/kdtree_vs_kiddo.rs` so that both measure
 //! the same maps.
 
-use adaptive_pm::photon_map::PhotonRecord;
+use adaptive_pm::photon_map::{CompactPhoton, PhotonRecord, Quantizer};
 use adaptive_pm::rng::Rng;
 use glam::Vec3;
 
@@ -18,4 +18,20 @@ pub fn records(n: usize, seed: u64) -> Vec<PhotonRecord> {
             depth: (rng.next_u32() % 4) as u8,
         })
         .collect()
+}
+
+/// The records' positions, as kiddo takes them.
+pub fn points(records: &[PhotonRecord]) -> Vec<[f32; 3]> {
+    records.iter().map(|r| r.position.to_array()).collect()
+}
+
+/// The frame the records are encoded in: the unit cube.
+pub fn unit_frame() -> Quantizer {
+    Quantizer::new(Vec3::ZERO, Vec3::ONE, 1.0)
+}
+
+/// The records encoded as the tracer writes them, in [`unit_frame`].
+pub fn compact(records: &[PhotonRecord]) -> (Vec<CompactPhoton>, Quantizer) {
+    let q = unit_frame();
+    (records.iter().map(|r| q.encode(r)).collect(), q)
 }

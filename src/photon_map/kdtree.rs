@@ -264,23 +264,20 @@ fn field_bounds_par(photons: &[CompactPhoton]) -> FieldBounds {
 /// the split planes alone bound only the axes split on, and a map of one plane
 /// (a floor's caustic) is never split across it, so a query far off that plane
 /// would otherwise visit every leaf.
-fn grid_bounds(b: &FieldBounds) -> [[f32; 3]; 2] {
+fn grid_bounds((lo, hi): &FieldBounds) -> [[f32; 3]; 2] {
     // The same conversion as a photon's distance (`query::dist2`); an empty
     // map keeps the sentinel an empty fold gives.
-    let coord = |field: u64, a: usize| {
-        if field == u64::MAX {
-            u32::MAX
-        } else {
-            CompactPhoton::field_value(field, a)
-        }
-    };
-    let (lo, hi) = b;
-    [0, 1].map(|side| {
+    let coords = |fields: &[u64; 3]| {
         [0, 1, 2].map(|a| {
-            let field = if side == 0 { lo[a] } else { hi[a] };
-            coord(field, a) as i32 as f32
+            let c = if fields[a] == u64::MAX {
+                u32::MAX
+            } else {
+                CompactPhoton::field_value(fields[a], a)
+            };
+            c as i32 as f32
         })
-    })
+    };
+    [coords(lo), coords(hi)]
 }
 
 fn is_valid(r: &PhotonRecord) -> bool {

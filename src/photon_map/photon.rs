@@ -100,7 +100,7 @@ impl CompactPhoton {
         POSITION_MASK << (axis as u32 * POSITION_BITS)
     }
 
-    /// A difference of two masked fields of `axis`, in grid steps.
+    /// A masked field of `axis` (or a difference of two), in grid steps.
     #[inline(always)]
     pub(crate) fn field_value(field: u64, axis: usize) -> u32 {
         (field >> (axis as u32 * POSITION_BITS)) as u32

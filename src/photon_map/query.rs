@@ -143,6 +143,28 @@ fn gap2(off: &[f32; 3]) -> f32 {
     off[0] * off[0] + off[1] * off[1] + off[2] * off[2]
 }
 
+/// A subtree: its photons, where they start in the map, its stem index.
+type Subtree<'a> = (&'a [CompactPhoton], usize, usize);
+
+/// The two children of the inner node `node` (whose subtree `photons` starts
+/// at `base`), the near one first: the left one when `left_is_near`.
+#[inline(always)]
+fn children(
+    photons: &[CompactPhoton],
+    base: usize,
+    node: usize,
+    left_is_near: bool,
+) -> [Subtree<'_>; 2] {
+    let mid = photons.len() / 2;
+    let left = (&photons[..mid], base, 2 * node + 1);
+    let right = (&photons[mid + 1..], base + mid + 1, 2 * node + 2);
+    if left_is_near {
+        [left, right]
+    } else {
+        [right, left]
+    }
+}
+
 /// Inserts `n` into `heap`, a max-heap on `dist2` of at most `k` entries: pushed when
 /// the heap is not full, else it replaces the farthest (the caller checks that `n` is
 /// nearer than it).
@@ -256,12 +278,8 @@ impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
         let mid = n / 2;
         let (axis, split) = stems::split(self.stems[node]);
         let d = self.q[axis] - split as f32;
-        let (left, right) = (&photons[..mid], &photons[mid + 1..]);
-        if d < 0.0 {
-            self.visit(left, base, off, 2 * node + 1);
-        } else {
-            self.visit(right, base + mid + 1, off, 2 * node + 2);
-        }
+        let [near, far] = children(photons, base, node, d < 0.0);
+        self.visit(near.0, near.1, off, near.2);
         // The node photon is at least |d| away (its distance adds squares to
         // d * d, rounding up or not at all): read it only if that could enter.
         if self.may_enter(d * d) {
@@ -269,11 +287,7 @@ impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
         }
         off[axis] = d.abs();
         if self.may_enter(gap2(&off)) {
-            if d < 0.0 {
-                self.visit(right, base + mid + 1, off, 2 * node + 2);
-            } else {
-                self.visit(left, base, off, 2 * node + 1);
-            }
+            self.visit(far.0, far.1, off, far.2);
         }
     }
 }
@@ -309,34 +323,15 @@ impl Within<'_> {
         let mid = n / 2;
         let (axis, split) = stems::split(self.stems[node]);
         let d = self.q[axis] - split as f32;
-        let (left, right) = (&photons[..mid], &photons[mid + 1..]);
-        let (near, near_base, near_node, far, far_base, far_node) = if d < 0.0 {
-            (
-                left,
-                base,
-                2 * node + 1,
-                right,
-                base + mid + 1,
-                2 * node + 2,
-            )
-        } else {
-            (
-                right,
-                base + mid + 1,
-                2 * node + 2,
-                left,
-                base,
-                2 * node + 1,
-            )
-        };
-        self.visit(near, near_base, off, near_node);
+        let [near, far] = children(photons, base, node, d < 0.0);
+        self.visit(near.0, near.1, off, near.2);
         // As for k nearest: the node photon is at least |d| away.
         if d * d <= self.r2 {
             self.consider(base + mid, &photons[mid]);
         }
         off[axis] = d.abs();
         if gap2(&off) <= self.r2 {
-            self.visit(far, far_base, off, far_node);
+            self.visit(far.0, far.1, off, far.2);
         }
     }
 }
