@@ -43,6 +43,11 @@ pub struct AreaLight {
     /// Each triangle's emission frame (z = its geometric normal).
     frames: Vec<Frame>,
     cdf: Vec<f32>,
+    /// Where to start looking in `cdf`: `guide[j]` is the triangle that
+    /// holds the area `j / guide.len()` of the way along, so a photon's
+    /// triangle is found in O(1) expected steps instead of a binary search
+    /// (13 dependent, unpredictable branches for an 8k-triangle emitter).
+    guide: Vec<u32>,
 }
 
 impl AreaLight {
@@ -62,6 +67,13 @@ impl AreaLight {
             .iter()
             .map(|&[a, b, c]| Frame::from_normal((b - a).cross(c - a).normalize()))
             .collect();
+        let buckets = triangles.len();
+        let guide = (0..buckets)
+            .map(|j| {
+                let at = (acc * j as f64 / buckets as f64) as f32;
+                cdf.partition_point(|&c| c < at) as u32
+            })
+            .collect();
         Some(AreaLight {
             mesh: index,
             emission,
@@ -69,7 +81,29 @@ impl AreaLight {
             triangles,
             frames,
             cdf,
+            guide,
         })
+    }
+
+    /// The triangle whose share of the area holds `target`: the first whose
+    /// running area is at least `target` (the last for a larger one), as a
+    /// binary search of `cdf` finds it. The guide gives a start; the walk
+    /// from it is exact whatever the start, so rounding in the bucket does
+    /// not matter.
+    fn triangle_at(&self, target: f32) -> usize {
+        let n = self.cdf.len();
+        if target.is_nan() {
+            return 0; // where the binary search ends: no `c < NaN`
+        }
+        let bucket = (target / self.area * self.guide.len() as f32) as usize;
+        let mut i = self.guide[bucket.min(self.guide.len() - 1)] as usize;
+        while i > 0 && self.cdf[i - 1] >= target {
+            i -= 1;
+        }
+        while i < n && self.cdf[i] < target {
+            i += 1;
+        }
+        i.min(n - 1)
     }
 
     /// Changes the `cos^n` profile.
@@ -85,11 +119,7 @@ impl AreaLight {
     /// Samples a photon: position area-uniform, direction `~ cos^(n+1)`.
     /// `u_tri` picks the triangle.
     pub fn sample(&self, u_tri: f32, u_pos: [f32; 2], u_dir: [f32; 2]) -> EmittedPhoton {
-        let target = u_tri * self.area;
-        let i = self
-            .cdf
-            .partition_point(|&c| c < target)
-            .min(self.triangles.len() - 1);
+        let i = self.triangle_at(u_tri * self.area);
         let [a, b, c] = self.triangles[i];
         let (b0, b1) = uniform_triangle(u_pos);
         let origin = a * b0 + b * b1 + c * (1.0 - b0 - b1);
@@ -232,5 +262,80 @@ fn ratio(a: f32, b: f32) -> f32 {
         a / b
     } else {
         0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::emitter::CosN;
+    use crate::rng::Rng;
+
+    /// A strip of `areas.len()` triangles with those areas (0 for a
+    /// degenerate one) along x.
+    fn strip(areas: &[f32]) -> Mesh {
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for (k, &a) in areas.iter().enumerate() {
+            let x = k as f32 * 3.0;
+            let base = positions.len() as u32;
+            positions.extend([
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x + 1.0, 0.0, 0.0),
+                Vec3::new(x, 2.0 * a, 0.0),
+            ]);
+            indices.push([base, base + 1, base + 2]);
+        }
+        Mesh {
+            name: "strip".into(),
+            positions,
+            indices,
+            material: 0,
+            normals: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_guide_finds_the_triangle_the_binary_search_finds() {
+        let emission = Emission {
+            radiance: Vec3::ONE,
+            profile: CosN::new(1.0).unwrap(),
+        };
+        let mut rng = Rng::new(7);
+        let uneven: Vec<f32> = (0..1000)
+            .map(|i| match i % 7 {
+                0 => 0.0,
+                1 => 1e-6,
+                2 => 50.0,
+                _ => rng.next_f32(),
+            })
+            .collect();
+        for areas in [vec![1.0], vec![0.0, 1.0, 0.0], vec![1.0; 64], uneven] {
+            let light = AreaLight::new(&strip(&areas), 0, emission).unwrap();
+            let binary = |t: f32| {
+                light
+                    .cdf
+                    .partition_point(|&c| c < t)
+                    .min(light.cdf.len() - 1)
+            };
+            // Every running area exactly, its neighbours, the ends, and
+            // random targets.
+            let mut targets: Vec<f32> = vec![0.0, -1.0, light.area, 2.0 * light.area];
+            for &c in light.cdf.iter().filter(|&&c| c > 0.0) {
+                // The floats either side of a positive `c`.
+                let (below, above) = (c.to_bits() - 1, c.to_bits() + 1);
+                targets.extend([c, f32::from_bits(below), f32::from_bits(above)]);
+            }
+            targets.extend((0..10_000).map(|_| rng.next_f32() * light.area));
+            for t in targets {
+                assert_eq!(
+                    light.triangle_at(t),
+                    binary(t),
+                    "target {t} of {}",
+                    light.area
+                );
+            }
+            assert_eq!(light.triangle_at(f32::NAN), binary(f32::NAN));
+        }
     }
 }

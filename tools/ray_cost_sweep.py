@@ -1,0 +1,67 @@
+#!/usr/bin/env python3
+"""Where the tracer reaches 0.8 of raw Embree: the Cornell box with every
+triangle split into 4^L (`examples/trace_vs_raw.rs`, SPLIT = L), the same
+photons and paths with dearer rays. For each L it runs ROUNDS alternating
+raw/trace rounds and keeps their whole output; `print` makes the markdown
+table (medians over the rounds) from those files.
+
+    cargo build --release --example trace_vs_raw
+    python3 tools/ray_cost_sweep.py run N_MAX THREADS ROUNDS DIR L [L ...]
+    python3 tools/ray_cost_sweep.py print DIR"""
+import os
+import statistics
+import subprocess
+import sys
+
+BINARY = "target/release/examples/trace_vs_raw"
+
+
+def run(n_max, threads, rounds, out, levels):
+    os.makedirs(out, exist_ok=True)
+    for level in levels:
+        cmd = [BINARY, str(n_max), str(threads), str(rounds), str(level)]
+        text = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+        with open(os.path.join(out, f"split{level}_t{threads}.txt"), "w") as f:
+            f.write("$ " + " ".join(cmd) + "\n" + text)
+        print(f"split {level}, {threads} thread(s) done", file=sys.stderr)
+
+
+def parse(path):
+    lines = open(path).read().splitlines()
+    triangles, threads = lines[1].split(" triangles, ")
+    rounds = [l.split() for l in lines[3:] if len(l.split()) == 8 and l.split()[0].isdigit()]
+    col = lambda i: statistics.median(float(r[i]) for r in rounds)
+    return {
+        "triangles": int(triangles),
+        "threads": int(threads.split()[0]),
+        "rounds": len(rounds),
+        "raw": col(1), "trace": col(3), "ratio": col(4),
+        "raw_ns": col(5), "trace_ns": col(6), "added_ns": col(7),
+    }
+
+
+def table(out):
+    runs = [parse(os.path.join(out, f)) for f in sorted(os.listdir(out)) if f.endswith(".txt")]
+    if not runs:
+        sys.exit(f"{out}: no split*_t*.txt")
+    runs.sort(key=lambda r: (r["threads"], r["triangles"]))
+    head = ["triangles", "threads", "rounds", "raw Mrays/s", "tracer Mrays/s", "of raw",
+            "raw ns/ray", "tracer ns/ray", "added ns/ray"]
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    for r in runs:
+        print(f"| {r['triangles']} | {r['threads']} | {r['rounds']} | {r['raw']:.2f} | "
+              f"{r['trace']:.2f} | **{r['ratio']:.3f}** | {r['raw_ns']:.0f} | "
+              f"{r['trace_ns']:.0f} | {r['added_ns']:.0f} |")
+    print("\nmedians over the rounds of each row; ns per ray are per thread")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) >= 7 and sys.argv[1] == "run":
+        run(int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), sys.argv[5],
+            [int(l) for l in sys.argv[6:]])
+        table(sys.argv[5])
+    elif len(sys.argv) == 3 and sys.argv[1] == "print":
+        table(sys.argv[2])
+    else:
+        sys.exit(__doc__)
