@@ -8,12 +8,15 @@
 //! rounds, drifts much less than two commands run apart.
 //!
 //! `cargo run --release --example trace_vs_raw -- [N_MAX] [THREADS] [ROUNDS] [SPLIT]`
-//! (defaults 2000000, 1, 5, 0). With SPLIT = L every triangle of the box is
-//! split into 4^L (`benches/common/subdivided.rs`): the same photons and
-//! paths, dearer rays (`SPLIT_LIGHTS=1` splits the light too). Each round also prints the nanoseconds a ray costs
-//! raw and in the tracer; their difference is what the tracer adds to a ray. With `NORAW=1` the raw passes are skipped (for
-//! profiling the tracer alone, e.g. under `perf record`); `BATCH=B` sets the
-//! photons per parallel batch (default 1024).
+//! (defaults 2000000, 1, 5, 0).
+//! - SPLIT = L splits every triangle of the box into 4^L
+//!   (`benches/common/subdivided.rs`): the same photons and paths, dearer
+//!   rays. The light is left whole unless `SPLIT_LIGHTS=1`.
+//! - Each round also prints the nanoseconds a ray costs on one core, raw and
+//!   in the tracer; their difference is what the tracer adds to a ray.
+//! - `NORAW=1` skips the raw passes (to profile the tracer alone, e.g. under
+//!   `perf record`); `BATCH=B` sets the photons per parallel batch (default
+//!   1024).
 
 use adaptive_pm::embree::{measure_throughput, thread_pool, Device};
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
