@@ -14,7 +14,8 @@
 //! call on incoherent rays of the same scene, both in rays per second: the
 //! tracer's share of raw Embree throughput, on the Cornell box, on the same
 //! box with every triangle but the light's split into 1024 (30 722
-//! triangles: the same photons, dearer rays) and on the gallery.
+//! triangles) and into 65 536 (1 966 082 triangles): the same photons,
+//! dearer rays; and on the gallery.
 //!
 //! Timed in *thread CPU time* (`CLOCK_THREAD_CPUTIME_ID`) on Linux, not wall
 //! time: the development machine runs several jobs on 2 cores and wall-clock
@@ -243,13 +244,14 @@ fn bench_tracer(c: &mut Criterion) {
     let mut group = c.benchmark_group("tracer");
     group.sample_size(10);
     group.measurement_time(Duration::from_secs(5));
-    // The Cornell box (32 triangles), the same box with every triangle but
-    // the light's split into 4^5 (30 722 triangles: the same photons, dearer
-    // rays) and the
-    // gallery (988 triangles, glossy surfaces, four lights): the tracer's
-    // share of raw Embree grows with the cost of a ray.
+    // The Cornell box (32 triangles); the same box with every triangle but
+    // the light's split into 4^5 (30 722 triangles) and into 4^8 (1 966 082
+    // triangles): the same photons, dearer rays; and the gallery (988
+    // triangles, glossy surfaces, four lights). The tracer's share of raw
+    // Embree grows with the cost of a ray.
     let cornell = Scene::cornell().unwrap();
     for (name, scene) in [
+        ("cornell_2m", subdivided(&cornell, 8, false)),
         ("cornell_32k", subdivided(&cornell, 5, false)),
         ("cornell", cornell),
         ("gallery", Scene::load(gallery).unwrap()),
