@@ -252,7 +252,7 @@ fn bench_tracer(c: &mut Criterion) {
     let cornell = Scene::cornell().unwrap();
     for (name, scene) in [
         ("cornell_2m", subdivided(&cornell, 8, false)),
-        ("cornell_32k", subdivided(&cornell, 5, false)),
+        ("cornell_30k", subdivided(&cornell, 5, false)),
         ("cornell", cornell),
         ("gallery", Scene::load(gallery).unwrap()),
     ] {

@@ -3,7 +3,11 @@
 triangle split into 4^L (`examples/trace_vs_raw.rs`, SPLIT = L), the same
 photons and paths with dearer rays. For each L it runs ROUNDS alternating
 raw/trace rounds and keeps their whole output; `print` makes the markdown
-table (medians over the rounds) from those files.
+table from those files: per file, the round with the median ratio (a row
+of one round, so its columns agree) and the range of the ratio over all
+rounds (this machine drifts by tens of percent between minutes).
+
+Run from the repository root:
 
     cargo build --release --example trace_vs_raw
     python3 tools/ray_cost_sweep.py run N_MAX THREADS ROUNDS DIR L [L ...]
@@ -29,31 +33,37 @@ def run(n_max, threads, rounds, out, levels):
 def parse(path):
     lines = open(path).read().splitlines()
     triangles, threads = lines[1].split(" triangles, ")
-    rounds = [l.split() for l in lines[3:] if len(l.split()) == 8 and l.split()[0].isdigit()]
-    col = lambda i: statistics.median(float(r[i]) for r in rounds)
+    rounds = [[float(x) for x in l.split()] for l in lines[3:]
+              if len(l.split()) == 8 and l.split()[0].isdigit()]
+    if not rounds:
+        sys.exit(f"{path}: no rounds")
+    by_ratio = sorted(rounds, key=lambda r: r[4])
+    r = by_ratio[len(by_ratio) // 2]
     return {
         "triangles": int(triangles),
         "threads": int(threads.split()[0]),
         "rounds": len(rounds),
-        "raw": col(1), "trace": col(3), "ratio": col(4),
-        "raw_ns": col(5), "trace_ns": col(6), "added_ns": col(7),
+        "raw": r[1], "trace": r[3], "ratio": r[4],
+        "low": by_ratio[0][4], "high": by_ratio[-1][4],
+        "raw_ns": r[5], "trace_ns": r[6], "added_ns": r[7],
     }
 
 
 def table(out):
-    runs = [parse(os.path.join(out, f)) for f in sorted(os.listdir(out)) if f.endswith(".txt")]
-    if not runs:
+    names = sorted(f for f in os.listdir(out) if f.startswith("split") and f.endswith(".txt"))
+    if not names:
         sys.exit(f"{out}: no split*_t*.txt")
-    runs.sort(key=lambda r: (r["threads"], r["triangles"]))
+    runs = sorted((parse(os.path.join(out, f)) for f in names),
+                  key=lambda r: (r["threads"], r["triangles"]))
     head = ["triangles", "threads", "rounds", "raw Mrays/s", "tracer Mrays/s", "of raw",
-            "raw ns/ray", "tracer ns/ray", "added ns/ray"]
+            "of raw, all rounds", "raw ns/ray", "tracer ns/ray", "added ns/ray"]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
     for r in runs:
         print(f"| {r['triangles']} | {r['threads']} | {r['rounds']} | {r['raw']:.2f} | "
-              f"{r['trace']:.2f} | **{r['ratio']:.3f}** | {r['raw_ns']:.0f} | "
-              f"{r['trace_ns']:.0f} | {r['added_ns']:.0f} |")
-    print("\nmedians over the rounds of each row; ns per ray are per thread")
+              f"{r['trace']:.2f} | **{r['ratio']:.3f}** | {r['low']:.3f}–{r['high']:.3f} | "
+              f"{r['raw_ns']:.0f} | {r['trace_ns']:.0f} | {r['added_ns']:.0f} |")
+    print("\neach row is the round with the median ratio; ns per ray are per thread")
 
 
 if __name__ == "__main__":

@@ -5,8 +5,10 @@
 use adaptive_pm::scene::Scene;
 use glam::Vec3;
 
-/// `scene` with every triangle split into 4^`levels` (midpoint subdivision):
-/// the same surfaces, materials and lights, and rays that cost more.
+/// `scene`'s meshes with every triangle split into 4^`levels` (midpoint
+/// subdivision): the same surfaces, materials and area lights, and rays
+/// that cost more. Punctual lights, the camera and vertex normals are not
+/// copied (the Cornell box, which the benches split, has none of them).
 /// Emitting meshes are split too only with `split_lights`: left whole,
 /// sampling a light (finding a photon's triangle) costs what it cost before.
 pub fn subdivided(scene: &Scene, levels: u32, split_lights: bool) -> Scene {

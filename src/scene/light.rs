@@ -90,11 +90,12 @@ impl AreaLight {
     /// binary search of `cdf` finds it. The guide gives a start; the walk
     /// from it is exact whatever the start, so rounding in the bucket does
     /// not matter.
+    ///
+    /// A NaN target lands in bucket 0, whose start is 0, and takes no step:
+    /// 0, as the binary search (no `c < NaN`). An area that overflowed to
+    /// infinity puts every target in bucket 0: still exact, in O(n).
     fn triangle_at(&self, target: f32) -> usize {
         let n = self.cdf.len();
-        if target.is_nan() {
-            return 0; // where the binary search ends: no `c < NaN`
-        }
         let bucket = (target / self.area * self.guide.len() as f32) as usize;
         let mut i = self.guide[bucket.min(self.guide.len() - 1)] as usize;
         while i > 0 && self.cdf[i - 1] >= target {
@@ -268,7 +269,6 @@ fn ratio(a: f32, b: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::emitter::CosN;
     use crate::rng::Rng;
 
     /// A strip of `areas.len()` triangles with those areas (0 for a
@@ -310,7 +310,16 @@ mod tests {
                 _ => rng.next_f32(),
             })
             .collect();
-        for areas in [vec![1.0], vec![0.0, 1.0, 0.0], vec![1.0; 64], uneven] {
+        // The first running area one float below the guide's first bucket
+        // boundary: the guide starts past it and must step back.
+        let step_back = [0x40c6_29f8, 0x3fa4_92ad, 0x3fe7_c147].map(f32::from_bits);
+        for areas in [
+            vec![1.0],
+            vec![0.0, 1.0, 0.0],
+            vec![1.0; 64],
+            step_back.to_vec(),
+            uneven,
+        ] {
             let light = AreaLight::new(&strip(&areas), 0, emission).unwrap();
             let binary = |t: f32| {
                 light
@@ -320,7 +329,17 @@ mod tests {
             };
             // Every running area exactly, its neighbours, the ends, and
             // random targets.
-            let mut targets: Vec<f32> = vec![0.0, -1.0, light.area, 2.0 * light.area];
+            let mut targets: Vec<f32> = vec![
+                0.0,
+                -0.0,
+                -1.0,
+                f32::from_bits(1), // the smallest subnormal
+                light.area,
+                2.0 * light.area,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                f32::NAN,
+            ];
             for &c in light.cdf.iter().filter(|&&c| c > 0.0) {
                 // The floats either side of a positive `c`.
                 let (below, above) = (c.to_bits() - 1, c.to_bits() + 1);
@@ -335,7 +354,6 @@ mod tests {
                     light.area
                 );
             }
-            assert_eq!(light.triangle_at(f32::NAN), binary(f32::NAN));
         }
     }
 }
