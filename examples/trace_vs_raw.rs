@@ -51,7 +51,7 @@ fn main() -> Result<(), adaptive_pm::Error> {
             .surface_sampler()
             .incoherent_rays(1_000_000, 1, scene.ray_epsilon())
     };
-    let triangles: usize = scene.meshes().iter().map(|m| m.indices.len()).sum();
+    let triangles = scene.triangle_count();
     let device = Device::new()?;
     let tracer = Tracer::new(scene.commit(&device)?);
     let pool = thread_pool(threads)?;

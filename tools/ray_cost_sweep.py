@@ -13,7 +13,6 @@ Run from the repository root:
     python3 tools/ray_cost_sweep.py run N_MAX THREADS ROUNDS DIR L [L ...]
     python3 tools/ray_cost_sweep.py print DIR"""
 import os
-import statistics
 import subprocess
 import sys
 
@@ -33,8 +32,9 @@ def run(n_max, threads, rounds, out, levels):
 def parse(path):
     lines = open(path).read().splitlines()
     triangles, threads = lines[1].split(" triangles, ")
-    rounds = [[float(x) for x in l.split()] for l in lines[3:]
-              if len(l.split()) == 8 and l.split()[0].isdigit()]
+    # Round rows have 8 fields; the closing summary line has more.
+    rows = (l.split() for l in lines[3:])
+    rounds = [[float(x) for x in f] for f in rows if len(f) == 8 and f[0].isdigit()]
     if not rounds:
         sys.exit(f"{path}: no rounds")
     by_ratio = sorted(rounds, key=lambda r: r[4])

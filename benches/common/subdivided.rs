@@ -19,7 +19,8 @@ pub fn subdivided(scene: &Scene, levels: u32, split_lights: bool) -> Scene {
     for mesh in scene.meshes() {
         let mut tris: Vec<[Vec3; 3]> = (0..mesh.indices.len()).map(|i| mesh.triangle(i)).collect();
         let emits = scene.materials()[mesh.material].emission.is_some();
-        for _ in 0..if emits && !split_lights { 0 } else { levels } {
+        let levels = if emits && !split_lights { 0 } else { levels };
+        for _ in 0..levels {
             tris = tris
                 .iter()
                 .flat_map(|&[a, b, c]| {
