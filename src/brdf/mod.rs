@@ -83,6 +83,7 @@ impl Brdf {
     }
 
     /// Importance-samples `wo` for a given `wi`.
+    #[inline]
     pub fn sample(&self, wi: Vec3, u: [f32; 2]) -> Option<BrdfSample> {
         dispatch!(self, b => b.sample(wi, u))
     }

@@ -95,12 +95,19 @@ pub(super) fn shade_batch<C: RayCaster>(
     scratch: &mut Scratch,
 ) -> BatchOut {
     scratch.rays.clear();
-    scratch.rays.extend(batch.iter().map(|p| Ray {
-        origin: p.origin,
-        dir: p.direction,
-        tnear: 0.0,
-        tfar: f32::INFINITY,
-    }));
+    scratch.rays.reserve(batch.len());
+    for p in batch {
+        // Field by field: copying the 12-byte vectors whole went through the
+        // stack with overlapping stores and loads (a store-forwarding stall
+        // per ray, 4 % of the trace under `perf annotate`).
+        let (o, d) = (p.origin, p.direction);
+        scratch.rays.push(Ray {
+            origin: Vec3::new(o.x, o.y, o.z),
+            dir: Vec3::new(d.x, d.y, d.z),
+            tnear: 0.0,
+            tfar: f32::INFINITY,
+        });
+    }
     scratch.hits.clear();
     scratch.hits.resize(batch.len(), None);
     ctx.caster.intersect_batch(&scratch.rays, &mut scratch.hits);

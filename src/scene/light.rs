@@ -119,6 +119,7 @@ impl AreaLight {
 
     /// Samples a photon: position area-uniform, direction `~ cos^(n+1)`.
     /// `u_tri` picks the triangle.
+    #[inline]
     pub fn sample(&self, u_tri: f32, u_pos: [f32; 2], u_dir: [f32; 2]) -> EmittedPhoton {
         let i = self.triangle_at(u_tri * self.area);
         let [a, b, c] = self.triangles[i];
@@ -223,6 +224,7 @@ impl Light {
 
     /// Samples an emitted photon: `u_sel` picks the triangle of an area light,
     /// `u_pos` the point on it, `u_dir` the direction.
+    #[inline]
     pub fn sample(&self, u_sel: f32, u_pos: [f32; 2], u_dir: [f32; 2]) -> EmittedPhoton {
         match self {
             Light::Area(a) => a.sample(u_sel, u_pos, u_dir),
