@@ -6,7 +6,11 @@ use clap::Parser;
 
 fn main() -> std::process::ExitCode {
     let args = cli::Cli::parse();
-    match cli::run(args) {
+    // Every rayon pool of the run, the global one included, sizes itself
+    // from RAYON_NUM_THREADS: refuse a count the machine cannot hold before
+    // any pool starts.
+    let checked = adaptive_pm::embree::default_threads().map_err(anyhow::Error::from);
+    match checked.and_then(|_| cli::run(args)) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");

@@ -58,14 +58,47 @@ pub fn max_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get()) * MAX_THREADS_PER_CORE
 }
 
-/// A rayon pool of `threads` workers (0: one per core) that each call
+/// The workers a pool of "0 threads" gets: `RAYON_NUM_THREADS` when it is
+/// set to a positive count (rayon's own convention), else one per available
+/// core.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] (`RAYON_NUM_THREADS`) above [`max_threads`]:
+/// rayon would start them all (`RAYON_NUM_THREADS=100000` started a
+/// hundred thousand spinning workers for a 100-photon trace).
+pub fn default_threads() -> Result<usize> {
+    let env = std::env::var("RAYON_NUM_THREADS").ok();
+    // Rayon ignores a value that is not a positive integer; so do we.
+    match env.as_deref().map(str::trim).map(str::parse::<usize>) {
+        Some(Ok(n)) if n > 0 => {
+            let max = max_threads();
+            if n > max {
+                return Err(Error::param(
+                    "RAYON_NUM_THREADS",
+                    format!(
+                        "{n} is more than {MAX_THREADS_PER_CORE} per available core (at most {max})"
+                    ),
+                ));
+            }
+            Ok(n)
+        }
+        _ => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
+}
+
+/// A rayon pool of `threads` workers (0: [`default_threads`]) that each call
 /// [`set_flush_denormals`] when they start. Run tracing inside
 /// `pool.install(..)`.
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] (`threads`) above [`max_threads`], or when the
-/// OS refuses to start the threads.
+/// OS refuses to start the threads; as [`default_threads`] for 0.
 pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
+    let threads = if threads == 0 {
+        default_threads()?
+    } else {
+        threads
+    };
     let max = max_threads();
     if threads > max {
         return Err(Error::param(
