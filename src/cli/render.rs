@@ -6,8 +6,8 @@ use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Mode, Tracer};
 use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
-    cache::DEFAULT_STRIDE, check_output_path, render_with, Integrator, RenderConfig, RenderMaps,
-    ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
+    cache::DEFAULT_STRIDE, check_output_path, render_with, Image, Integrator, RenderConfig,
+    RenderMaps, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
 };
 use adaptive_pm::scene::PreparedScene;
 use serde_json::json;
@@ -147,12 +147,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     })?;
     let render_s = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    match (args.tile, cfg.rows) {
-        (Some(_), Some((y0, _))) => {
-            super::assemble::write_tile(&image, y0, args.height, &args.out)?
-        }
-        _ => image.write_exr(&args.out)?,
-    }
+    warn_dropped(stats.dropped_samples, stats.samples);
+    write_image(&image, &cfg, &args)?;
     if let Some(p) = &args.png {
         image.write_png(
             p,
@@ -188,6 +184,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 "cache_entries": stats.cache_entries,
                 "cache_bytes_per_entry": stats.cache_bytes_per_entry,
                 "cache_misses": stats.cache_misses,
+                "dropped_samples": stats.dropped_samples,
                 "mean_rgb": [mean.x, mean.y, mean.z],
                 "out": args.out,
             })
@@ -214,4 +211,23 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// Writes the EXR: a tile of the whole image (`--tile`) or the whole image.
+pub fn write_image(image: &Image, cfg: &RenderConfig, args: &RenderArgs) -> anyhow::Result<()> {
+    match (args.tile, cfg.rows) {
+        (Some(_), Some((y0, _))) => super::assemble::write_tile(image, y0, args.height, &args.out)?,
+        _ => image.write_exr(&args.out)?,
+    }
+    Ok(())
+}
+
+/// Says on stderr that samples were left out (the image is biased there).
+pub fn warn_dropped(dropped: u64, samples: u64) {
+    if dropped > 0 {
+        eprintln!(
+            "warning: {dropped} of {samples} samples were NaN or infinite and were left out \
+             (degenerate geometry, or radiance beyond f32): the image is biased where they fell"
+        );
+    }
 }

@@ -1,6 +1,6 @@
 //! `adaptive-pm render --integrator path`: the unbiased reference image.
 
-use adaptive_pm::render::{render_path, PathHalves, PathPart, RenderConfig, ToneMap, View};
+use adaptive_pm::render::{render_path_with, PathHalves, PathPart, RenderConfig, ToneMap, View};
 use serde_json::json;
 use std::time::Instant;
 
@@ -18,7 +18,7 @@ pub fn run_path(
         View::Map { .. } => anyhow::bail!("--visualize-map needs --integrator photon"),
     };
     let t = Instant::now();
-    let image = if cfg.spp >= 2 {
+    let (image, dropped) = if cfg.spp >= 2 {
         let mut half = cfg.clone();
         half.spp = cfg.spp / 2;
         let h = pool.install(|| PathHalves::render(scene, rt, &half, part))?;
@@ -27,12 +27,15 @@ pub fn run_path(
             "path tracer noise (two halves): {:.3} % rms of the mean",
             100.0 * noise
         );
-        h.mean()
+        (h.mean(), h.dropped_samples)
     } else {
-        pool.install(|| render_path(scene, rt, cfg, part, &|_, _| {}))?
+        let (image, stats) = pool.install(|| render_path_with(scene, rt, cfg, part, &|_, _| {}))?;
+        (image, stats.dropped_samples)
     };
     let secs = t.elapsed().as_secs_f64();
-    image.write_exr(&args.out)?;
+    let samples = u64::from(cfg.width) * u64::from(image.height) * u64::from(cfg.spp);
+    super::render::warn_dropped(dropped, samples);
+    super::render::write_image(&image, cfg, args)?;
     if let Some(p) = &args.png {
         image.write_png(
             p,
@@ -46,7 +49,7 @@ pub fn run_path(
         println!(
             "{}",
             json!({"scene": args.scene, "integrator": "path", "width": args.width,
-            "height": args.height, "spp": cfg.spp, "render_s": secs,
+            "height": args.height, "spp": cfg.spp, "render_s": secs, "dropped_samples": dropped,
             "mean_rgb": [m.x, m.y, m.z], "out": args.out})
         );
     } else {

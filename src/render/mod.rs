@@ -90,7 +90,9 @@ pub use estimate::{irradiance_default, irradiance_estimate, radiance_estimate, E
 pub use image::{check_output_path, Image, ToneMap, MAX_DIMENSION};
 pub use metrics::{mean_bias, relative_rmse, relative_rmse_masked, rmse};
 pub use path::{Integrator, PathPart, PathTracer};
-pub use path_render::{indirect_irradiance, light_pixels, render_path, PathHalves};
+pub use path_render::{
+    indirect_irradiance, light_pixels, render_path, render_path_with, PathHalves,
+};
 pub use quadrature::{floor_points, quadrature_irradiance};
 pub use run::{render, render_with, RenderStats};
 

@@ -9,24 +9,27 @@
 
 use super::camera::CameraRays;
 use super::path::{PathPart, PathTracer};
+use super::run::{pixel_mean, RenderStats};
 use super::{Image, RenderConfig};
 use crate::embree::{CommittedScene, Ray};
 use crate::error::Result;
 use crate::rng::{hash2, Rng};
 use crate::sampling::{cosine_hemisphere, Frame};
 use crate::scene::{Scene, SurfacePoint};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Renders `part` of the light of `scene` with the path tracer, on the
-/// current rayon pool. Reads `width`, `height`, `spp`, `seed`, `camera` and
-/// `show_emitters` of `cfg` (no photon-map settings). `progress(rows_done,
-/// rows_total)` is called from worker threads.
+/// current rayon pool. Reads `width`, `height`, `rows` (a tile), `spp`,
+/// `seed`, `camera` and `show_emitters` of `cfg` (no photon-map settings).
+/// `progress(rows_done, rows_total)` is called from worker threads.
 ///
 /// # Errors
-/// [`crate::Error::InvalidParameter`] for bad settings.
+/// [`crate::Error::InvalidParameter`] for bad settings,
+/// [`crate::Error::InvalidScene`] for a scene that fails
+/// [`Scene::validate`].
 pub fn render_path(
     scene: &Scene,
     rt: &CommittedScene,
@@ -34,37 +37,65 @@ pub fn render_path(
     part: PathPart,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Image> {
+    render_path_with(scene, rt, cfg, part, progress).map(|(image, _)| image)
+}
+
+/// [`render_path`] with the render's counts ([`RenderStats::samples`] and
+/// [`RenderStats::dropped_samples`]; the photon-map fields are 0).
+///
+/// # Errors
+/// As [`render_path`].
+pub fn render_path_with(
+    scene: &Scene,
+    rt: &CommittedScene,
+    cfg: &RenderConfig,
+    part: PathPart,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(Image, RenderStats)> {
     cfg.validate()?;
-    let mut image = Image::new(cfg.width, cfg.height)?;
+    scene.validate()?;
+    // A tile is an image of its rows only; pixels keep their whole-image
+    // index, so their samples are the whole image's.
+    let (y0, y1) = cfg.rows.unwrap_or((0, cfg.height));
+    let mut image = Image::new(cfg.width, y1 - y0)?;
     let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
     let pt = PathTracer::new(scene, rt);
     let width = cfg.width as usize;
-    let rows = cfg.height as u64;
+    let rows = (y1 - y0) as u64;
     let done = AtomicU64::new(0);
-    let inv_spp = 1.0 / cfg.spp as f32;
+    let dropped = AtomicU64::new(0);
     image
         .pixels
         .par_chunks_mut(width)
         .enumerate()
         .for_each(|(y, row)| {
+            let y = y + y0 as usize;
+            let mut row_dropped = 0;
             for (x, px) in row.iter_mut().enumerate() {
                 let key = hash2(cfg.seed, (y * width + x) as u64);
-                let mut sum = Vec3::ZERO;
+                let (mut sum, mut kept) = (DVec3::ZERO, 0);
                 for s in 0..cfg.spp {
                     let mut rng = Rng::new(hash2(key, s as u64));
                     let [jx, jy] = rng.next_2d();
                     let ray = rays.ray(x as f32 + jx, y as f32 + jy);
                     let l = pt.radiance(ray, part, cfg.show_emitters, &mut rng);
-                    // A NaN or infinite sample (degenerate geometry) is dropped, not spread.
+                    // A NaN or infinite sample is dropped, not spread, and counted.
                     if l.is_finite() {
-                        sum += l;
+                        sum += l.as_dvec3();
+                        kept += 1;
                     }
                 }
-                *px = sum * inv_spp;
+                (*px, row_dropped) = pixel_mean(sum, kept, cfg.spp, row_dropped);
             }
+            dropped.fetch_add(row_dropped, Ordering::Relaxed);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, rows);
         });
-    Ok(image)
+    let stats = RenderStats {
+        samples: cfg.width as u64 * rows * cfg.spp as u64,
+        dropped_samples: dropped.into_inner(),
+        ..RenderStats::default()
+    };
+    Ok((image, stats))
 }
 
 /// A path-traced image as two independent halves.
@@ -74,6 +105,9 @@ pub struct PathHalves {
     pub a: Image,
     /// Half B (an independent seed).
     pub b: Image,
+    /// Samples of both halves left out as NaN or infinite
+    /// ([`RenderStats::dropped_samples`]).
+    pub dropped_samples: u64,
 }
 
 impl PathHalves {
@@ -87,11 +121,15 @@ impl PathHalves {
         cfg: &RenderConfig,
         part: PathPart,
     ) -> Result<Self> {
-        let a = render_path(scene, rt, cfg, part, &|_, _| {})?;
+        let (a, sa) = render_path_with(scene, rt, cfg, part, &|_, _| {})?;
         let mut cb = cfg.clone();
         cb.seed = hash2(cfg.seed, 0x0B_5EED);
-        let b = render_path(scene, rt, &cb, part, &|_, _| {})?;
-        Ok(PathHalves { a, b })
+        let (b, sb) = render_path_with(scene, rt, &cb, part, &|_, _| {})?;
+        Ok(PathHalves {
+            a,
+            b,
+            dropped_samples: sa.dropped_samples + sb.dropped_samples,
+        })
     }
 
     /// The mean of the halves.

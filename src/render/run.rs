@@ -13,7 +13,7 @@ use crate::engine::albedo::AlbedoTable;
 use crate::error::{Error, Result};
 use crate::rng::{hash2, Rng};
 use crate::scene::Scene;
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -35,6 +35,11 @@ pub struct RenderStats {
     pub cache_entries: usize,
     /// Bytes per cache entry (0 without one).
     pub cache_bytes_per_entry: usize,
+    /// Camera samples whose radiance was NaN or infinite (degenerate
+    /// geometry, or a light so close its `I / r^2` overflows f32), left
+    /// out of their pixel's mean. Not 0: the image is biased there; the
+    /// command line warns.
+    pub dropped_samples: u64,
 }
 
 /// Renders `scene` (whose Embree geometry is `rt`) with `maps`, on the current
@@ -69,6 +74,7 @@ pub fn render_with(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Image, RenderStats)> {
     cfg.validate()?;
+    scene.validate()?;
     if maps.is_none() && cfg.view != View::DirectOnly {
         return Err(Error::param(
             "photon map",
@@ -133,7 +139,7 @@ pub fn render_with(
     let rows = (y1 - y0) as u64;
     let done = AtomicU64::new(0);
     let (lookup_ns, hits, misses) = (AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0));
-    let inv_spp = 1.0 / cfg.spp as f32;
+    let dropped = AtomicU64::new(0);
     image
         .pixels
         .par_chunks_mut(width)
@@ -141,23 +147,27 @@ pub fn render_with(
         .for_each(|(y, row)| {
             let y = y + y0 as usize;
             let mut sc = Scratch::new(cfg.k);
+            let mut row_dropped = 0;
             for (x, px) in row.iter_mut().enumerate() {
                 let pixel = (y * width + x) as u64;
                 let key = hash2(cfg.seed, pixel);
                 let sampler = PixelSampler::new(key);
-                let mut sum = Vec3::ZERO;
+                let mut sum = DVec3::ZERO;
+                let mut kept = 0;
                 for s in 0..cfg.spp {
                     let mut rng = Rng::new(hash2(key, s as u64));
                     let [jx, jy] = sampler.get_2d(dim::PIXEL, s, cfg.spp);
                     let ray = rays.ray(x as f32 + jx, y as f32 + jy);
                     let l = ctx.radiance(ray, (&sampler, s), &mut rng, &mut sc);
-                    // A NaN or infinite sample (degenerate geometry) is dropped, not spread.
+                    // A NaN or infinite sample is dropped, not spread, and counted.
                     if l.is_finite() {
-                        sum += l;
+                        sum += l.as_dvec3();
+                        kept += 1;
                     }
                 }
-                *px = sum * inv_spp;
+                (*px, row_dropped) = pixel_mean(sum, kept, cfg.spp, row_dropped);
             }
+            dropped.fetch_add(row_dropped, Ordering::Relaxed);
             lookup_ns.fetch_add(sc.lookup_ns, Ordering::Relaxed);
             hits.fetch_add(sc.hits, Ordering::Relaxed);
             misses.fetch_add(sc.misses, Ordering::Relaxed);
@@ -171,6 +181,20 @@ pub fn render_with(
         cache_build_s: built.as_ref().map_or(0.0, |c| c.build_s),
         cache_entries: cache.map_or(0, |c| c.len()),
         cache_bytes_per_entry: cache.map_or(0, |c| c.bytes_per_entry()),
+        dropped_samples: dropped.into_inner(),
     };
     Ok((image, stats))
+}
+
+/// A pixel from the f64 sum of its `kept` finite samples out of `spp`, and
+/// the dropped-sample count so far: summed in f32, samples near f32's range
+/// overflowed to infinite pixels. A mean beyond f32 drops every sample.
+pub(crate) fn pixel_mean(sum: DVec3, kept: u32, spp: u32, dropped: u64) -> (Vec3, u64) {
+    let dropped = dropped + u64::from(spp - kept);
+    let mean = (sum / f64::from(spp)).as_vec3();
+    if mean.is_finite() {
+        (mean, dropped)
+    } else {
+        (Vec3::ZERO, dropped + u64::from(kept))
+    }
 }

@@ -25,7 +25,7 @@ use super::path_render::{light_pixels, PathHalves};
 use super::{mean_bias, relative_rmse_masked, render_path, render_with, Image, RenderConfig, View};
 use crate::embree::CommittedScene;
 use crate::engine::{Budget, Mode, TraceConfig, Tracer};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::scene::{PreparedScene, Scene};
 use serde::Serialize;
 use std::time::Instant;
@@ -134,6 +134,19 @@ pub fn run_study(
     // jittered edge of a bright light would dominate any image RMSE.
     base.show_emitters = false;
     base.validate()?;
+    // Errors are measured against the reference with its noise taken out
+    // (`noise_free`). A reference noisier than the path render read it as
+    // exact: relRMSE 0, 0 s to the target.
+    if cfg.reference_spp / 2 < cfg.path_spp {
+        return Err(Error::param(
+            "reference_spp",
+            format!(
+                "{} is less than twice the path render's {} spp: the path render's \
+                 error could not be told from the reference's noise",
+                cfg.reference_spp, cfg.path_spp
+            ),
+        ));
+    }
     let keep: Vec<bool> = light_pixels(scene, rt, &base)?.iter().map(|l| !l).collect();
 
     let t = Instant::now();
@@ -149,6 +162,13 @@ pub fn run_study(
         cfg.reference_spp,
         100.0 * reference_noise
     ));
+    if halves.dropped_samples > 0 {
+        return Err(Error::InvalidScene(format!(
+            "the path-traced reference left out {} NaN or infinite samples \
+             (degenerate geometry, or radiance beyond f32)",
+            halves.dropped_samples
+        )));
+    }
 
     let mut pc = base.clone();
     pc.spp = cfg.path_spp;
@@ -159,6 +179,17 @@ pub fn run_study(
         relative_rmse_masked(&path, &reference, &keep)?,
         reference_noise,
     );
+    if path_err <= 0.0 {
+        return Err(Error::param(
+            "reference_spp",
+            format!(
+                "the path render's error is within the reference's noise ({:.3} %): \
+                 raise the reference's spp (now {})",
+                100.0 * reference_noise,
+                cfg.reference_spp
+            ),
+        ));
+    }
     let path_time = path_s * (path_err / cfg.target).powi(2);
     log(&format!(
         "path: {} spp in {path_s:.2} s, relRMSE {:.2} % -> {:.0} % in {path_time:.1} s",
@@ -314,6 +345,19 @@ pub fn run_direct_study(
     base.seed = cfg.seed;
     base.show_emitters = false;
     base.validate()?;
+    // Errors are measured against the reference with its noise taken out
+    // (`noise_free`). A reference noisier than the path render read it as
+    // exact: relRMSE 0, 0 s to the target.
+    if cfg.reference_spp / 2 < cfg.path_spp {
+        return Err(Error::param(
+            "reference_spp",
+            format!(
+                "{} is less than twice the path render's {} spp: the path render's \
+                 error could not be told from the reference's noise",
+                cfg.reference_spp, cfg.path_spp
+            ),
+        ));
+    }
     let keep: Vec<bool> = light_pixels(scene, rt, &base)?.iter().map(|l| !l).collect();
     let mut rc = base.clone();
     rc.spp = (cfg.reference_spp / 2).max(1);

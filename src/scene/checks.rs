@@ -48,6 +48,13 @@ pub(super) fn check_material(m: &Material) -> Result<()> {
                 m.name, e.radiance
             )));
         }
+        if e.radiance.max_element() > MAX_RADIANCE {
+            return Err(bad(format!(
+                "material `{}` emits a radiance {} above {MAX_RADIANCE:e}",
+                m.name,
+                sci(e.radiance)
+            )));
+        }
     }
     Ok(())
 }
@@ -82,18 +89,59 @@ pub(super) fn drop_degenerate(
     (out, Some(Kept { kept, len_dropped }))
 }
 
-fn power_ok(p: Vec3) -> bool {
-    p.is_finite() && luminance(p).is_finite()
+/// The largest power (W, any channel) a light may have, and the largest
+/// total over a scene's lights ([`super::Scene::validate`]). Photon powers,
+/// the map's quantiser (which keeps 256x headroom), density estimates and
+/// pixel sums are f32: 1e30 leaves eight orders of magnitude below f32's
+/// 3.4e38 for them (the Sun, 3.8e26 W, fits). Above it, sums overflowed
+/// and whole renders came out null or zero.
+pub const MAX_LIGHT_POWER: f32 = 1e30;
+
+/// The smallest non-zero power (luminance, W) a light may have: a photon of
+/// it split a trillion ways is still a normal f32. Below it, flush-to-zero
+/// (on in every tracing thread) made the light emit nothing.
+pub const MIN_LIGHT_POWER: f32 = 1e-20;
+
+/// The largest emitted radiance (any channel): what a camera sees of an
+/// emitter, and what pixel sums add up.
+pub const MAX_RADIANCE: f32 = 1e30;
+
+/// `[1e38, 1e38, 1e38]`: huge and tiny values in a readable form.
+fn sci(v: Vec3) -> String {
+    format!("[{:e}, {:e}, {:e}]", v.x, v.y, v.z)
+}
+
+/// `None` when a light's power is usable, else what is wrong with it.
+pub(super) fn power_problem(p: Vec3) -> Option<String> {
+    let y = luminance(p);
+    if !p.is_finite() || !y.is_finite() || p.min_element() < 0.0 {
+        return Some(format!("its power {} is negative or overflows", sci(p)));
+    }
+    if p.max_element() > MAX_LIGHT_POWER {
+        return Some(format!(
+            "its power {} W is above {MAX_LIGHT_POWER:e} W (scale the scene's lights down)",
+            sci(p)
+        ));
+    }
+    if y > 0.0 && y < MIN_LIGHT_POWER {
+        return Some(format!(
+            "its power {y:e} W is below {MIN_LIGHT_POWER:e} W (too small to carry photons)"
+        ));
+    }
+    None
 }
 
 pub(super) fn area_light(mesh: &Mesh, index: usize, e: Emission) -> Result<AreaLight> {
     let light = AreaLight::new(mesh, index, e)
         .ok_or_else(|| bad(format!("emissive mesh `{}` has no area", mesh.name)))?;
-    if !light.area.is_finite() || !power_ok(light.power()) {
+    if !light.area.is_finite() {
         return Err(bad(format!(
-            "emissive mesh `{}`: its area or power overflows",
+            "emissive mesh `{}`: its area overflows",
             mesh.name
         )));
+    }
+    if let Some(why) = power_problem(light.power()) {
+        return Err(bad(format!("emissive mesh `{}`: {why}", mesh.name)));
     }
     Ok(light)
 }
@@ -133,10 +181,17 @@ pub(super) fn check_punctual(light: &Light) -> Result<()> {
             light.kind()
         )));
     }
-    if !intensity.is_finite() || intensity.min_element() < 0.0 || !power_ok(light.power()) {
+    if !intensity.is_finite() || intensity.min_element() < 0.0 {
         return Err(bad(format!(
-            "{} light intensity {intensity} is negative, not finite, or its power overflows",
+            "{} light intensity {intensity} is negative or not finite",
             light.kind()
+        )));
+    }
+    if let Some(why) = power_problem(light.power()) {
+        return Err(bad(format!(
+            "{} light of intensity {}: {why}",
+            light.kind(),
+            sci(intensity)
         )));
     }
     Ok(())

@@ -25,7 +25,7 @@ pub mod validate;
 
 #[cfg(feature = "gltf")]
 pub use buffers::{percent_decode, resolve_inside, MAX_BUFFER_BYTES};
-pub use checks::MAX_COORDINATE;
+pub use checks::{MAX_COORDINATE, MAX_LIGHT_POWER, MAX_RADIANCE, MIN_LIGHT_POWER};
 
 pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
 pub use prepared::PreparedScene;
@@ -34,6 +34,7 @@ pub use surface::{SurfacePoint, SurfaceSampler};
 use crate::brdf::Brdf;
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
+use crate::sampling::luminance;
 use glam::Vec3;
 #[cfg(feature = "gltf")]
 use std::path::Path;
@@ -465,6 +466,26 @@ impl Scene {
         }
         if self.triangle_count() == 0 {
             return Err(Error::InvalidScene("the scene has no triangle".into()));
+        }
+        // In f64: forty lights of 1e37 W each summed to infinity in f32.
+        let total = self.lights.iter().fold([0.0f64; 3], |mut t, l| {
+            let p = l.power();
+            for (t, c) in t.iter_mut().zip([p.x, p.y, p.z]) {
+                *t += f64::from(c);
+            }
+            t
+        });
+        let max = total.into_iter().fold(0.0, f64::max);
+        if max > f64::from(checks::MAX_LIGHT_POWER) {
+            return Err(Error::InvalidScene(format!(
+                "the lights' total power {max:e} W is above {:e} W (scale the scene's lights down)",
+                checks::MAX_LIGHT_POWER
+            )));
+        }
+        if !self.lights.iter().any(|l| luminance(l.power()) > 0.0) {
+            return Err(Error::InvalidScene(
+                "the scene has no light that emits: every light's power is zero".into(),
+            ));
         }
         Ok(())
     }

@@ -7,12 +7,16 @@ use adaptive_pm::embree::{measure_throughput, Device, Throughput};
 use adaptive_pm::scene::Scene;
 use serde_json::json;
 
+/// The most rays a pass may have.
+const MAX_RAYS: usize = 1 << 25;
+
 /// Arguments of `bench rays`.
 #[derive(clap::Args, Debug)]
 pub struct RaysArgs {
     /// A glTF file, or `cornell`.
     pub scene: String,
-    /// Rays per pass.
+    /// Rays per pass (at most 2^25: the rays, 32 bytes each, and their
+    /// packets stay within about 2 GB).
     #[arg(long, default_value_t = 2_000_000)]
     pub rays: usize,
     /// Seed of the rays.
@@ -33,8 +37,12 @@ fn row(t: &Throughput) -> serde_json::Value {
 }
 
 pub fn run(args: RaysArgs) -> anyhow::Result<()> {
-    if args.rays == 0 {
-        anyhow::bail!("--rays must be at least 1");
+    if args.rays == 0 || args.rays > MAX_RAYS {
+        // 1e8 rays aborted on their 3.2 GB allocation under a 4 GB limit.
+        anyhow::bail!(
+            "--rays {} is outside 1..={MAX_RAYS}: a throughput pass needs no more",
+            args.rays
+        );
     }
     let scene = Scene::open(&args.scene)?;
     let device = Device::new()?;

@@ -136,6 +136,15 @@ impl Reference {
         let rc = cfg.render_config(cfg.reference_spp, REFERENCE_SEED);
         let ind = PathHalves::render(scene, rt, &rc, PathPart::Indirect)?;
         let dir = PathHalves::render(scene, rt, &rc, PathPart::Direct)?;
+        // Every error of the study is measured against this image: one
+        // biased by left-out samples would skew them all.
+        let dropped = ind.dropped_samples + dir.dropped_samples;
+        if dropped > 0 {
+            return Err(crate::Error::InvalidScene(format!(
+                "the path-traced reference left out {dropped} NaN or infinite samples \
+                 (degenerate geometry, or radiance beyond f32)"
+            )));
+        }
         let grid = quadrature_grid(scene);
         let direct_e: Vec<f64> = points
             .iter()
@@ -218,7 +227,12 @@ impl Reference {
         points: Vec<SurfacePoint>,
         keep: Vec<bool>,
     ) -> Self {
-        let ind = PathHalves { a: ia, b: ib };
+        // Rendered without a dropped sample (checked before it was cached).
+        let ind = PathHalves {
+            a: ia,
+            b: ib,
+            dropped_samples: 0,
+        };
         let sum = |x: &Image, y: &Image| {
             let mut s = x.clone();
             for (p, q) in s.pixels.iter_mut().zip(&y.pixels) {
@@ -229,6 +243,7 @@ impl Reference {
         let full = PathHalves {
             a: sum(&ind.a, &da),
             b: sum(&ind.b, &db),
+            dropped_samples: 0,
         };
         let irradiance: Vec<f64> = (0..points.len())
             .map(|i| c.direct_e[i] + 0.5 * (c.indirect_a[i] + c.indirect_b[i]))

@@ -1,0 +1,189 @@
+//! Hostile magnitudes: lights whose powers would overflow (or vanish in)
+//! the f32 arithmetic downstream are refused with a clear error, and a
+//! render that meets a sample beyond f32 says so (`dropped_samples`)
+//! instead of printing null or zero means. Also: path-traced tiles are the
+//! whole image's rows.
+
+use adaptive_pm::brdf::Lambert;
+use adaptive_pm::embree::Device;
+use adaptive_pm::emitter::CosN;
+use adaptive_pm::render::{
+    render_path, render_path_with, render_with, PathPart, RenderConfig, View,
+};
+use adaptive_pm::scene::{
+    Camera, Emission, Light, Material, PointLight, Scene, MAX_LIGHT_POWER, MIN_LIGHT_POWER,
+};
+use adaptive_pm::Error;
+use glam::Vec3;
+use std::f32::consts::PI;
+
+/// A white Lambert square of side `side` in the z = 0 plane, facing +z.
+fn floor(side: f32) -> Scene {
+    let mut s = Scene::new();
+    let white = s.add_material(Material {
+        name: "white".into(),
+        brdf: Lambert::new(Vec3::splat(0.8)).unwrap().into(),
+        emission: None,
+    });
+    let h = side / 2.0;
+    let positions = vec![
+        Vec3::new(-h, -h, 0.0),
+        Vec3::new(h, -h, 0.0),
+        Vec3::new(h, h, 0.0),
+        Vec3::new(-h, h, 0.0),
+    ];
+    s.add_mesh("floor", positions, vec![[0, 1, 2], [0, 2, 3]], white)
+        .unwrap();
+    s
+}
+
+fn point(z: f32, intensity: f32) -> Light {
+    Light::Point(PointLight {
+        position: Vec3::new(0.0, 0.0, z),
+        intensity: Vec3::splat(intensity),
+    })
+}
+
+fn message(e: Error) -> String {
+    let msg = e.to_string();
+    assert!(matches!(e, Error::InvalidScene(_)), "{msg}");
+    msg
+}
+
+#[test]
+fn a_light_above_the_power_limit_is_refused() {
+    let mut s = floor(1.0);
+    // Power 4 pi I: just below and just above the limit.
+    let at_limit = MAX_LIGHT_POWER / (4.0 * PI) * 0.99;
+    s.add_light(point(1.0, at_limit)).unwrap();
+    let msg = message(s.add_light(point(1.0, at_limit * 1.02)).unwrap_err());
+    assert!(msg.contains("above 1e30 W"), "{msg}");
+}
+
+#[test]
+fn lights_whose_total_power_overflows_are_refused() {
+    // Forty lights, each within the limit; together 40x it. In f32 the
+    // total of forty 1.3e38 W lights was infinite, and renders null.
+    let mut s = floor(1.0);
+    let each = MAX_LIGHT_POWER / (4.0 * PI) * 0.9;
+    for _ in 0..40 {
+        s.add_light(point(1.0, each)).unwrap();
+    }
+    let msg = message(s.validate().unwrap_err());
+    assert!(msg.contains("total power"), "{msg}");
+}
+
+#[test]
+fn an_emitter_brighter_than_the_radiance_limit_is_refused() {
+    let mut s = floor(1.0);
+    let lamp = s.add_material(Material {
+        name: "lamp".into(),
+        brdf: Lambert::new(Vec3::ZERO).unwrap().into(),
+        emission: Some(Emission {
+            radiance: Vec3::splat(1e38),
+            profile: CosN::new(1.0).unwrap(),
+        }),
+    });
+    let quad = vec![
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(1e-3, 0.0, 1.0),
+        Vec3::new(0.0, 1e-3, 1.0),
+    ];
+    let msg = message(s.add_mesh("lamp", quad, vec![[0, 2, 1]], lamp).unwrap_err());
+    assert!(
+        msg.contains("radiance [1e38, 1e38, 1e38] above 1e30"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn dark_and_vanishing_lights() {
+    // Below the floor, flush-to-zero made the light emit no photon at all.
+    let mut s = floor(1.0);
+    let tiny = MIN_LIGHT_POWER / (4.0 * PI) * 0.5;
+    let msg = message(s.add_light(point(1.0, tiny)).unwrap_err());
+    assert!(msg.contains("below 1e-20 W"), "{msg}");
+
+    // A dark light is allowed, but not as the only light.
+    s.add_light(point(1.0, 0.0)).unwrap();
+    let msg = message(s.validate().unwrap_err());
+    assert!(msg.contains("no light that emits"), "{msg}");
+    s.add_light(point(1.0, 1.0)).unwrap();
+    s.validate().unwrap();
+}
+
+#[test]
+fn samples_beyond_f32_are_counted_not_silently_dropped() {
+    // A light 1e-7 above a floor 1e-6 wide: I / r^2 is about 1e42, beyond
+    // f32, at every visible point. Before, those samples were dropped in
+    // silence and the image read 0.
+    let mut s = floor(1e-6);
+    s.add_light(point(1e-7, 7e28)).unwrap();
+    s.set_camera(Camera {
+        eye: Vec3::new(0.0, 0.0, 1e-5),
+        forward: Vec3::NEG_Z,
+        up: Vec3::Y,
+        vfov_deg: 5.0,
+    })
+    .unwrap();
+    let device = Device::new().unwrap();
+    let rt = s.embree_geometry(&device).unwrap();
+    let mut cfg = RenderConfig::new(8, 8);
+    cfg.spp = 2;
+    cfg.view = View::DirectOnly;
+    let (image, stats) = render_with(&s, &rt, None, None, &cfg, &|_, _| {}).unwrap();
+    assert_eq!(stats.samples, 128);
+    assert!(stats.dropped_samples > 0, "{stats:?}");
+    assert!(image.pixels.iter().all(|p| p.is_finite()));
+    let (image, stats) = render_path_with(&s, &rt, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+    assert!(stats.dropped_samples > 0, "{stats:?}");
+    assert!(image.pixels.iter().all(|p| p.is_finite()));
+}
+
+#[test]
+fn a_bright_but_representable_scene_drops_nothing() {
+    // The Sun's power, 3.8e26 W, one unit above a floor: large, not overflowing.
+    let mut s = floor(4.0);
+    s.add_light(point(1.0, 3.8e26 / (4.0 * PI))).unwrap();
+    s.set_camera(Camera {
+        eye: Vec3::new(0.0, 0.0, 3.0),
+        forward: Vec3::NEG_Z,
+        up: Vec3::Y,
+        vfov_deg: 40.0,
+    })
+    .unwrap();
+    let device = Device::new().unwrap();
+    let rt = s.embree_geometry(&device).unwrap();
+    let mut cfg = RenderConfig::new(9, 9);
+    cfg.spp = 4;
+    cfg.view = View::DirectOnly;
+    let (image, stats) = render_with(&s, &rt, None, None, &cfg, &|_, _| {}).unwrap();
+    assert_eq!(stats.dropped_samples, 0);
+    // Lambert floor under an isotropic point light: at the centre, straight
+    // below it, L = (albedo / pi) I / h^2 (the centre pixel spans 0.24
+    // units, where the cos^3 falloff stays within 2 %).
+    let centre = image.pixels[4 * 9 + 4].x as f64;
+    let expected = 0.8 / std::f64::consts::PI * 3.8e26 / (4.0 * std::f64::consts::PI);
+    assert!(
+        (centre / expected - 1.0).abs() < 0.05,
+        "{centre:e} against {expected:e}"
+    );
+}
+
+#[test]
+fn path_traced_tiles_are_the_whole_image_rows() {
+    let s = Scene::cornell().unwrap();
+    let device = Device::new().unwrap();
+    let rt = s.embree_geometry(&device).unwrap();
+    let mut cfg = RenderConfig::new(12, 10);
+    cfg.spp = 2;
+    let whole = render_path(&s, &rt, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+    let mut rows = Vec::new();
+    for (y0, y1) in [(0, 3), (3, 10)] {
+        cfg.rows = Some((y0, y1));
+        let tile = render_path(&s, &rt, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+        assert_eq!(tile.pixels.len(), 12 * (y1 - y0) as usize);
+        rows.extend(tile.pixels);
+    }
+    assert_eq!(rows, whole.pixels);
+}
