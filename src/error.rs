@@ -48,6 +48,20 @@ pub enum Error {
         /// Bytes allowed.
         budget_bytes: u64,
     },
+    /// The system refused memory that the budget allows: a limit on the
+    /// process's address space, or memory other processes hold.
+    #[error(
+        "the system refused {bytes} bytes for {what}, although the memory budget allows \
+         {budget_bytes} bytes"
+    )]
+    OutOfMemory {
+        /// What the memory was for.
+        what: &'static str,
+        /// Bytes asked for.
+        bytes: u64,
+        /// The run's memory budget.
+        budget_bytes: u64,
+    },
     /// Reading or writing a file failed.
     #[error("cannot access {}", path.display())]
     Io {

@@ -29,6 +29,10 @@ fn cli_hint(e: &anyhow::Error) -> Option<&'static str> {
         Some(adaptive_pm::Error::Budget { .. }) => {
             Some("raise the memory budget with --budget-mb, or lower --quality / --n-max")
         }
+        Some(adaptive_pm::Error::OutOfMemory { .. }) => Some(
+            "lower --quality / --n-max, or raise the process's memory limit (ulimit -v) \
+             or free memory",
+        ),
         _ => None,
     })
 }

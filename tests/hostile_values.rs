@@ -187,3 +187,58 @@ fn path_traced_tiles_are_the_whole_image_rows() {
     }
     assert_eq!(rows, whole.pixels);
 }
+
+/// Loads tests/hostile/base.gltf with `edit` applied to its JSON text.
+fn load_edited(edit: impl Fn(String) -> String) -> adaptive_pm::Result<Scene> {
+    let base = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/hostile/base.gltf");
+    let text = edit(std::fs::read_to_string(base).unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("edited.gltf");
+    std::fs::write(&path, text).unwrap();
+    Scene::load(&path)
+}
+
+fn load_error(edit: impl Fn(String) -> String) -> String {
+    match load_edited(edit) {
+        Ok(_) => panic!("the edited scene loaded"),
+        Err(e) => {
+            let mut msg = e.to_string();
+            let mut src = std::error::Error::source(&e);
+            while let Some(s) = src {
+                msg += &format!(": {s}");
+                src = s.source();
+            }
+            msg
+        }
+    }
+}
+
+#[test]
+fn gltf_files_that_loaded_wrong_in_silence_are_refused() {
+    load_edited(|t| t).unwrap();
+    // A rotation of length 2 scaled the lamp by 4.
+    let msg = load_error(|t| t.replace("\"rotation\":[1,0,0,0]", "\"rotation\":[2,0,0,0]"));
+    assert!(
+        msg.contains("node 1 (`lamp`)") && msg.contains("not a unit quaternion"),
+        "{msg}"
+    );
+    // Within a rounding of unit length is fine.
+    load_edited(|t| t.replace("\"rotation\":[1,0,0,0]", "\"rotation\":[1.0001,0,0,0]")).unwrap();
+    // Required extensions the loader does not read: the geometry could be
+    // compressed, or anything else.
+    let required = |ext: &'static str| {
+        move |t: String| t.replacen('{', &format!("{{\"extensionsRequired\": [\"{ext}\"], "), 1)
+    };
+    let msg = load_error(required("KHR_draco_mesh_compression"));
+    assert!(
+        msg.contains("requires the extension `KHR_draco_mesh_compression`"),
+        "{msg}"
+    );
+    load_edited(required("KHR_materials_emissive_strength")).unwrap();
+    // Five indices are one triangle and a remainder, dropped before.
+    let msg = load_error(|t| t.replace("\"count\":6", "\"count\":5"));
+    assert!(
+        msg.contains("triangle list of 5 indices, not a multiple of 3"),
+        "{msg}"
+    );
+}

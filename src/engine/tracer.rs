@@ -181,7 +181,8 @@ impl<C: RayCaster> Tracer<C> {
     /// [`Error::InvalidParameter`] for bad settings, [`Error::InvalidScene`] for a
     /// scene without light or a hit on a material the scene does not have,
     /// [`Error::Budget`] when the emitted photons alone would not fit in the
-    /// memory budget (Q = 1 on any real machine).
+    /// memory budget (Q = 1 on any real machine), [`Error::OutOfMemory`]
+    /// when the system refuses memory the budget allows.
     pub fn trace(&self, cfg: &TraceConfig) -> Result<TraceOutput> {
         self.trace_checked(&cfg.check()?, &|_| {})
     }
@@ -401,11 +402,14 @@ impl<C: RayCaster> Tracer<C> {
     }
 }
 
-/// Reserves room for `more` photons, or says the budget cannot be met.
+/// Reserves room for `more` photons (within the budget: checked by the
+/// callers), or says the system refused it.
 fn reserve(photons: &mut Vec<CompactPhoton>, more: usize, budget_bytes: u64) -> Result<()> {
-    photons.try_reserve_exact(more).map_err(|_| Error::Budget {
-        photons: (photons.len() + more) as u64,
-        needed_bytes: (photons.len() + more) as u64 * BYTES_PER_STORED_PHOTON,
-        budget_bytes,
-    })
+    photons
+        .try_reserve_exact(more)
+        .map_err(|_| Error::OutOfMemory {
+            what: "the photon map",
+            bytes: (photons.len() + more) as u64 * BYTES_PER_STORED_PHOTON,
+            budget_bytes,
+        })
 }

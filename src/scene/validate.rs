@@ -68,8 +68,31 @@ pub(super) fn multiplicity(t: Type) -> u64 {
     }
 }
 
+/// The extensions a file may require: the two the loader reads, and the
+/// texture ones (textures are ignored, so whatever they change is too).
+const SUPPORTED_REQUIRED: [&str; 5] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_texture_transform",
+    "KHR_texture_basisu",
+    "EXT_texture_webp",
+];
+
 /// Checks the document's structure; no buffer data is needed.
 pub(super) fn check_document(root: &Root) -> Result<()> {
+    // glTF 2.0: a loader must refuse a file that requires an extension it
+    // does not support (a Draco-compressed mesh read as plain data would be
+    // wrong geometry, silently).
+    if let Some(ext) = root
+        .extensions_required
+        .iter()
+        .find(|e| !SUPPORTED_REQUIRED.contains(&e.as_str()))
+    {
+        return Err(bad(format!(
+            "the file requires the extension `{ext}`, which is not supported (supported: {})",
+            SUPPORTED_REQUIRED.join(", ")
+        )));
+    }
     for (i, a) in root.accessors.iter().enumerate() {
         let name = label("accessor", i, a.name.as_deref());
         if !matches!(a.component_type, Checked::Valid(_)) || !matches!(a.type_, Checked::Valid(_)) {
@@ -200,6 +223,25 @@ fn check_mesh(root: &Root, i: usize, m: &json::Mesh) -> Result<()> {
                 )));
             }
         }
+        // A triangle list has three vertices a triangle: a remainder was
+        // dropped in silence before.
+        let count = match p.indices {
+            Some(ix) => root
+                .accessors
+                .get(ix.value())
+                .map(|a| (a.count.0, "indices")),
+            None => p
+                .attributes
+                .get(&Checked::Valid(json::mesh::Semantic::Positions))
+                .and_then(|a| root.accessors.get(a.value()))
+                .map(|a| (a.count.0, "positions")),
+        };
+        let triangles = matches!(p.mode, Checked::Valid(json::mesh::Mode::Triangles));
+        if let Some((n, what)) = count.filter(|&(n, _)| triangles && n % 3 != 0) {
+            return Err(bad(format!(
+                "{here} is a triangle list of {n} {what}, not a multiple of 3"
+            )));
+        }
     }
     Ok(())
 }
@@ -283,6 +325,16 @@ fn check_node(root: &Root, i: usize, n: &json::Node, lights: usize) -> Result<()
         && n.rotation.iter().flat_map(|q| q.0).all(|x| x.is_finite());
     if !finite {
         return Err(bad(format!("{name} has a non-finite transform")));
+    }
+    // glTF rotations are unit quaternions; another length scaled the
+    // geometry by its square, silently.
+    if let Some(q) = n.rotation.map(|q| q.0) {
+        let len = q.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>().sqrt();
+        if (len - 1.0).abs() > 1e-3 {
+            return Err(bad(format!(
+                "{name} has a rotation {q:?} of length {len}, not a unit quaternion"
+            )));
+        }
     }
     Ok(())
 }
