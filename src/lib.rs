@@ -152,6 +152,7 @@ pub mod embree;
 pub mod emitter;
 pub mod engine;
 pub mod error;
+pub mod input;
 // The paper's experiments drive the command line; they are not a stable API.
 #[cfg(feature = "experiments")]
 #[doc(hidden)]

@@ -10,6 +10,9 @@
 //!   the target (atomic within a file system). On any failure the temporary
 //!   file is removed and the target is left as it was.
 //!
+//! - An output is never one of the command's inputs, however spelled
+//!   ([`refuse_overwrite`]: same device and inode, or same resolved path).
+//!
 //! Every writer of the crate and of the CLI goes through [`write_bytes`],
 //! [`write_with`], [`write_via_path`] or [`AtomicOutput`].
 
@@ -245,4 +248,63 @@ pub fn probe(path: impl AsRef<Path>) -> Result<()> {
     drop(file);
     let _ = std::fs::remove_file(tmp);
     Ok(())
+}
+
+/// The identity of an existing file: its device and inode.
+#[cfg(unix)]
+fn identity(path: &Path) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+}
+
+/// Elsewhere: no identity, files are compared by resolved path.
+#[cfg(not(unix))]
+fn identity(_: &Path) -> Option<(u64, u64)> {
+    None
+}
+
+/// `path` with its folder resolved (symbolic links, `.`, `..`): how a path
+/// that does not exist yet is compared.
+fn resolved(path: &Path) -> PathBuf {
+    if let Ok(p) = path.canonicalize() {
+        return p;
+    }
+    match (parent_of(path).canonicalize(), path.file_name()) {
+        (Ok(dir), Some(name)) => dir.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// Whether `a` and `b` name the same file: the same device and inode when
+/// both exist (this sees through `./`, `..`, absolute spellings, symbolic
+/// and hard links), else the same path once resolved.
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (identity(a), identity(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => resolved(a) == resolved(b),
+    }
+}
+
+/// Refuses an output path that names one of the command's input files,
+/// however it is spelled: `out.apm`, `./out.apm`, `$PWD/out.apm`,
+/// `dir/../dir/out.apm`, a symbolic or hard link to it. Writing the output
+/// would replace that input (and a reader still streaming it would read the
+/// new file). Call it before any work, with every file the command reads.
+///
+/// Files are compared by device and inode when both exist, by their
+/// resolved paths otherwise.
+///
+/// # Errors
+/// [`Error::Io`] naming `out` and the input it would overwrite.
+pub fn refuse_overwrite(out: &Path, inputs: &[&Path]) -> Result<()> {
+    match inputs.iter().find(|input| same_file(out, input)) {
+        Some(input) => Err(invalid(
+            out,
+            &format!(
+                "the output is also the input {}: it would be overwritten",
+                input.display()
+            ),
+        )),
+        None => Ok(()),
+    }
 }

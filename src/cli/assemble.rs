@@ -4,11 +4,15 @@
 //! refusing tiles of different images, overlaps and gaps.
 
 use adaptive_pm::engine::Shard;
+use adaptive_pm::output::{check_target, refuse_overwrite};
 use adaptive_pm::photon_file::AtomicOutput;
-use adaptive_pm::render::Image;
+use adaptive_pm::render::image::check_dimensions;
+use adaptive_pm::render::{Image, MAX_DIMENSION};
 use anyhow::{bail, Context};
 use exr::prelude::*;
 use glam::Vec3;
+use std::fs::File;
+use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `assemble`.
@@ -58,55 +62,127 @@ pub fn write_tile(image: &Image, y0: u32, full_height: u32, path: &Path) -> anyh
     Ok(())
 }
 
-/// One tile: its display size, its first row and its pixels.
-struct Tile {
+/// Where a tile's rows sit in its image, from its header alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Placement {
+    /// The whole image's width and height.
     display: (usize, usize),
+    /// The tile's first row.
     y0: usize,
-    image: Image,
+    /// The tile's rows (each `display.0` pixels wide).
+    rows: usize,
 }
 
-fn read_tile(path: &Path) -> anyhow::Result<Tile> {
-    let img = read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![Vec3::ZERO; res.width() * res.height()]),
-        |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
-        },
-    )
-    .with_context(|| format!("reading tile {}", path.display()))?;
-    let d = img.attributes.display_window;
-    let pos = img.layer_data.attributes.layer_position;
-    let size = img.layer_data.size;
-    if d.position != Vec2(0, 0) || pos.x() != 0 || size.width() != d.size.width() {
+/// An EXR file opened past its header, its pixels not yet read.
+type TileReader = exr::block::reader::Reader<BufReader<File>>;
+
+/// Opens a tile (a regular file only: a FIFO would block) and reads its
+/// header, checking where its rows sit before any pixel is allocated.
+fn open_tile(path: &Path) -> anyhow::Result<(TileReader, Placement)> {
+    let (file, meta) = adaptive_pm::input::open_regular_file(path)?;
+    let reader = exr::block::read(BufReader::new(file), false)
+        .with_context(|| format!("reading tile {}", path.display()))?;
+    let placement = placement_of(path, reader.headers(), meta.len())?;
+    Ok((reader, placement))
+}
+
+/// Checks a tile's header: one layer of whole rows of an image within
+/// [`MAX_DIMENSION`] a side, and a file long enough for the blocks of pixels
+/// its header announces (a 1 KB file claiming 30000x30000 pixels made the
+/// decoder allocate 10.8 GB).
+fn placement_of(
+    path: &Path,
+    headers: &[exr::meta::header::Header],
+    len: u64,
+) -> anyhow::Result<Placement> {
+    let [h] = headers else {
+        bail!(
+            "{}: {} layers; a tile has one",
+            path.display(),
+            headers.len()
+        );
+    };
+    let d = h.shared_attributes.display_window;
+    let (w, ht) = (d.size.width(), d.size.height());
+    let max = MAX_DIMENSION as usize;
+    if w == 0 || ht == 0 || w > max || ht > max {
+        bail!(
+            "{}: a tile of a {w}x{ht} image; images are at most {max}x{max}",
+            path.display()
+        );
+    }
+    let pos = h.own_attributes.layer_position;
+    let size = h.layer_size;
+    if d.position != Vec2(0, 0) || pos.x() != 0 || size.width() != w {
         bail!(
             "{}: not a tile of whole rows (render --tile)",
             path.display()
         );
     }
-    if pos.y() < 0 || pos.y() as usize + size.height() > d.size.height() {
+    if pos.y() < 0 || pos.y() as usize + size.height() > ht {
         bail!("{}: its rows lie outside its image", path.display());
     }
-    Ok(Tile {
-        display: (d.size.width(), d.size.height()),
+    // Every block of pixels has at least its 8-byte entry in the offset table.
+    if (h.chunk_count as u64).saturating_mul(8) > len {
+        bail!(
+            "{}: its header announces {} blocks of pixels, more than its {len} bytes can hold \
+             (truncated or corrupt)",
+            path.display(),
+            h.chunk_count
+        );
+    }
+    Ok(Placement {
+        display: (w, ht),
         y0: pos.y() as usize,
-        image: Image {
-            width: size.width() as u32,
-            height: size.height() as u32,
-            pixels: img.layer_data.channel_data.pixels.1,
-        },
+        rows: size.height(),
     })
 }
 
-pub fn run(args: AssembleArgs) -> anyhow::Result<()> {
-    let mut tiles = args
-        .tiles
-        .iter()
-        .map(|p| read_tile(p).map(|t| (p, t)))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    tiles.sort_by_key(|(_, t)| t.y0);
+/// A pixel buffer of `n` black pixels, reserved fallibly.
+fn black_pixels(n: usize) -> anyhow::Result<Vec<Vec3>> {
+    let mut px = Vec::new();
+    px.try_reserve_exact(n)
+        .map_err(|_| anyhow::anyhow!("not enough memory for {n} pixels"))?;
+    px.resize(n, Vec3::ZERO);
+    Ok(px)
+}
+
+/// Decodes the pixels of a tile checked by [`open_tile`].
+fn read_pixels(reader: TileReader, path: &Path, at: Placement) -> anyhow::Result<Vec<Vec3>> {
+    let n = at.display.0 * at.rows;
+    // The decoder asks for its buffer through a closure that cannot fail:
+    // hand it the one reserved above.
+    let buffer = std::cell::Cell::new(Some(black_pixels(n)?));
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            move |res, _| (res.width(), buffer.take().unwrap_or_default()),
+            |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                if let Some(p) = px.get_mut(pos.y() * *w + pos.x()) {
+                    *p = Vec3::new(r, g, b);
+                }
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_chunks(reader)
+        .with_context(|| format!("reading tile {}", path.display()))?;
+    let (_, pixels) = img.layer_data.channel_data.pixels;
+    anyhow::ensure!(
+        pixels.len() == n,
+        "{}: its pixels do not match its header",
+        path.display()
+    );
+    Ok(pixels)
+}
+
+/// Checks that the tiles (sorted by first row) are of one image and cover
+/// its rows once; returns its size.
+fn check_layout(tiles: &[(&PathBuf, Placement)]) -> anyhow::Result<(usize, usize)> {
     let (w, h) = tiles[0].1.display;
     let mut next = 0usize;
-    for (p, t) in &tiles {
+    for (p, t) in tiles {
         if t.display != (w, h) {
             bail!(
                 "{} is a tile of a {}x{} image, not {w}x{h}",
@@ -121,16 +197,41 @@ pub fn run(args: AssembleArgs) -> anyhow::Result<()> {
         if t.y0 > next {
             bail!("rows {next}..{} are missing (no tile covers them)", t.y0);
         }
-        next = t.y0 + t.image.height as usize;
+        next = t.y0 + t.rows;
     }
     if next != h {
         bail!("rows {next}..{h} are missing (no tile covers them)");
     }
-    let mut image = Image::new(w as u32, h as u32)?;
-    for (_, t) in &tiles {
-        let start = t.y0 * w;
-        image.pixels[start..start + t.image.pixels.len()].copy_from_slice(&t.image.pixels);
+    Ok((w, h))
+}
+
+pub fn run(args: AssembleArgs) -> anyhow::Result<()> {
+    let inputs: Vec<&Path> = args.tiles.iter().map(PathBuf::as_path).collect();
+    refuse_overwrite(&args.out, &inputs).context("--out")?;
+    check_target(&args.out).context("--out")?;
+    // First every header (one file open at a time): the layout and the
+    // whole image's size are checked before any pixel is allocated.
+    let mut tiles = Vec::with_capacity(args.tiles.len());
+    for p in &args.tiles {
+        tiles.push((p, open_tile(p)?.1));
     }
+    tiles.sort_by_key(|(_, t)| t.y0);
+    let (w, h) = check_layout(&tiles)?;
+    check_dimensions(w as u32, h as u32)?;
+    let mut pixels = black_pixels(w * h)?;
+    for (p, at) in &tiles {
+        let (reader, again) = open_tile(p)?;
+        if again != *at {
+            bail!("{} changed while the tiles were assembled", p.display());
+        }
+        let start = at.y0 * w;
+        pixels[start..start + w * at.rows].copy_from_slice(&read_pixels(reader, p, *at)?);
+    }
+    let image = Image {
+        width: w as u32,
+        height: h as u32,
+        pixels,
+    };
     image.write_exr(&args.out)?;
     println!(
         "assembled {} tiles into {}x{}: wrote {}",

@@ -1,7 +1,9 @@
 //! `adaptive-pm merge SHARD.apm... --out MAP.apm [--json]`: every shard of one
 //! run into one map file, streamed (see `adaptive_pm::photon_file::merge`).
 
+use adaptive_pm::output::{check_target, refuse_overwrite};
 use adaptive_pm::photon_file::merge;
+use anyhow::Context;
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -21,9 +23,11 @@ pub struct MergeArgs {
 }
 
 pub fn run(args: MergeArgs) -> anyhow::Result<()> {
-    if args.shards.iter().any(|s| s == &args.out) {
-        anyhow::bail!("--out {} is also an input shard", args.out.display());
-    }
+    // Before reading anything: --out names no shard (by identity, not by
+    // spelling) and can be written.
+    let inputs: Vec<&std::path::Path> = args.shards.iter().map(PathBuf::as_path).collect();
+    refuse_overwrite(&args.out, &inputs).context("--out")?;
+    check_target(&args.out).context("--out")?;
     let t = Instant::now();
     let m = merge(&args.shards, &args.out)?;
     let merge_s = t.elapsed().as_secs_f64();

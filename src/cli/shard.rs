@@ -4,13 +4,14 @@
 use adaptive_pm::engine::counts::LightPlan;
 use adaptive_pm::engine::report::TraceReport;
 use adaptive_pm::engine::{Shard, TraceConfig};
+use adaptive_pm::output::{probe, refuse_overwrite};
 use adaptive_pm::photon_file::{
     canonical_frame, photons_checksum, scene_hash, write_photons, ShardInfo,
 };
 use adaptive_pm::photon_map::PhotonMap;
 use adaptive_pm::scene::Scene;
 use anyhow::{bail, Context};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Sharding arguments of `trace`.
 #[derive(clap::Args, Debug, Clone)]
@@ -84,6 +85,23 @@ impl ShardArgs {
     }
 }
 
+impl ShardArgs {
+    /// Checks `--out`, if given, before the scene is even loaded: it must
+    /// not name the scene file (`trace x.gltf --out x.gltf` replaced the
+    /// scene), its folder must exist and be writable, and it must not be a
+    /// folder or a device. A long trace then never ends in "cannot write".
+    pub fn check_out(&self, scene: &Path) -> anyhow::Result<()> {
+        let Some(out) = &self.out else {
+            return Ok(());
+        };
+        // A built-in scene's name is no file: compare only a path that exists.
+        let inputs: &[&Path] = if scene.exists() { &[scene] } else { &[] };
+        refuse_overwrite(out, inputs).context("--out")?;
+        probe(out).context("--out")?;
+        Ok(())
+    }
+}
+
 /// The run's checksum (`trace --json`'s `checksum`) and, with `--out`, its photon file.
 pub fn checksum_and_write(
     args: &ShardArgs,
@@ -103,7 +121,9 @@ pub fn checksum_and_write(
         let info = ShardInfo {
             scene_hash: scene_hash(scene),
             frame,
-            emitted: plans.iter().map(|p| cfg.shard.len_of(p.photons)).sum(),
+            emitted: plans
+                .iter()
+                .fold(0u64, |a, p| a.saturating_add(cfg.shard.len_of(p.photons))),
             emitted_total: plans.iter().fold(0u64, |a, p| a.saturating_add(p.photons)),
             budget_bound: report.budget_bound,
         };

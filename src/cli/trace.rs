@@ -28,6 +28,8 @@ pub struct TraceArgs {
 }
 
 pub fn run(args: TraceArgs) -> anyhow::Result<()> {
+    // Fail before any work: an --out that cannot be written, or is the scene.
+    args.shard.check_out(std::path::Path::new(&args.scene))?;
     let scene = open_scene(&args.scene, args.budget.cosn)?;
     let mut cfg: TraceConfig = args.budget.config(args.mode)?;
     cfg.shard = args.shard.resolve()?;

@@ -34,7 +34,8 @@ pub use device::Device;
 pub use packet::{default_batch_kernel, BatchKernel};
 pub use scene::{CommittedScene, SceneBuilder, EMBREE_LARGE};
 pub use threads::{
-    default_threads, flush_denormals_enabled, max_threads, set_flush_denormals, thread_pool, MAX_THREADS_PER_CORE,
+    default_threads, flush_denormals_enabled, max_threads, set_flush_denormals, thread_pool,
+    MAX_THREADS_PER_CORE,
 };
 #[cfg(feature = "cli")]
 #[doc(hidden)]

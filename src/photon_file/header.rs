@@ -200,6 +200,147 @@ impl Header {
     }
 }
 
+/// The largest power scale a photon file may declare: a photon carries at
+/// most its light's power, which a scene bounds at
+/// [`crate::scene::MAX_LIGHT_POWER`], times the quantiser's headroom
+/// ([`crate::engine::POWER_HEADROOM`]). Above it the decoded powers, and
+/// the sums a render makes of them, overflow f32: renders came out null or
+/// zero.
+pub const MAX_POWER_SCALE: f32 = crate::scene::MAX_LIGHT_POWER * crate::engine::POWER_HEADROOM;
+
+/// Bounce limit a run may have (`TraceConfig::validate`).
+const MAX_DEPTH_SETTING: u32 = 250;
+
+impl Header {
+    /// Checks every field against what a writer of this format can produce:
+    /// known flags and modes, a shard index below a non-zero count (a merged
+    /// map is shard 0 of 1), a finite frame with `min <= max`, a finite power
+    /// scale in `0..=`[`MAX_POWER_SCALE`], per-depth counts that add up to the
+    /// photon count, finite non-negative per-depth powers, and a map checksum
+    /// that matches the photon count, sum and frame. Nothing else in the
+    /// crate trusts a header field that this does not check.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] (`photon file`) naming the field and value.
+    pub fn validate(&self) -> Result<()> {
+        self.problem()
+            .map_or(Ok(()), |why| Err(Error::param("photon file", why)))
+    }
+
+    /// What is wrong with the header, if anything (see [`Header::validate`]).
+    fn problem(&self) -> Option<String> {
+        let known = FLAG_BUDGET_BOUND | FLAG_MERGED;
+        if self.flags & !known != 0 {
+            return Some(format!("unknown flags {:#x}", self.flags & !known));
+        }
+        let s = &self.settings;
+        if s.mode > 2 || s.estimator > 2 {
+            return Some(format!(
+                "unknown mode {} or estimator {}",
+                s.mode, s.estimator
+            ));
+        }
+        if s.max_depth > MAX_DEPTH_SETTING || s.split_cap == 0 {
+            return Some(format!(
+                "max depth {} (at most {MAX_DEPTH_SETTING}) or split cap {} (at least 1) out of range",
+                s.max_depth, s.split_cap
+            ));
+        }
+        if let Some(why) = self.shard_problem() {
+            return Some(why);
+        }
+        if self.emitted > self.emitted_total {
+            return Some(format!(
+                "emitted {} is above the run's total {}",
+                self.emitted, self.emitted_total
+            ));
+        }
+        if let Some(why) = self.frame_problem() {
+            return Some(why);
+        }
+        self.count_problem()
+    }
+
+    fn shard_problem(&self) -> Option<String> {
+        let (i, n) = (self.shard_index, self.shard_count);
+        if n == 0 || i >= n {
+            return Some(format!(
+                "shard {i}/{n}: the index must be below a non-zero count"
+            ));
+        }
+        let merged = self.flags & FLAG_MERGED != 0;
+        if merged && (n != 1 || self.merged_from == 0) {
+            return Some(format!(
+                "a merged map must be shard 0/1 of at least one shard, got {i}/{n} from {}",
+                self.merged_from
+            ));
+        }
+        if !merged && self.merged_from != 0 {
+            return Some(format!(
+                "an unmerged shard says it was merged from {} shards",
+                self.merged_from
+            ));
+        }
+        None
+    }
+
+    fn frame_problem(&self) -> Option<String> {
+        let (lo, hi) = (self.frame_min, self.frame_max);
+        if !lo.is_finite() || !hi.is_finite() || !lo.cmple(hi).all() {
+            return Some(format!(
+                "frame bounds {lo} .. {hi} are not finite or inverted"
+            ));
+        }
+        let p = self.power_scale;
+        // `contains` is false for NaN.
+        if !(0.0..=MAX_POWER_SCALE).contains(&p) || (p == 0.0 && self.photons > 0) {
+            return Some(format!(
+                "power scale {p:e} is not in (0, {MAX_POWER_SCALE:e}]"
+            ));
+        }
+        None
+    }
+
+    fn count_problem(&self) -> Option<String> {
+        if self.clamped > self.photons {
+            return Some(format!(
+                "{} clamped photons but {} photons",
+                self.clamped, self.photons
+            ));
+        }
+        let counted = self
+            .depth_photons
+            .iter()
+            .try_fold(0u64, |a, &n| a.checked_add(n));
+        if counted != Some(self.photons) {
+            return Some(format!(
+                "the per-depth counts do not add up to its {} photons",
+                self.photons
+            ));
+        }
+        if let Some(d) = self
+            .depth_power
+            .iter()
+            .position(|c| c.iter().any(|p| !p.is_finite() || *p < 0.0))
+        {
+            return Some(format!(
+                "the power at depth {d}, {:?}, is not finite and non-negative",
+                self.depth_power[d]
+            ));
+        }
+        let announced = super::MapHash {
+            count: self.photons,
+            sum: self.photon_sum,
+        };
+        if announced.checksum(&self.frame()) != self.map_checksum {
+            return Some(
+                "its map checksum does not match its photon count, sum and frame (corrupt)".into(),
+            );
+        }
+        None
+    }
+}
+
 /// Offset of the per-depth photon counts (then the per-depth powers).
 const DEPTH_PHOTONS_AT: usize = 160;
 
@@ -278,5 +419,84 @@ mod tests {
         wrong[8] = 9; // version
         assert!(Header::from_bytes(&wrong).is_err());
         assert!(Header::from_bytes(&b[..100]).is_err());
+    }
+
+    /// A header as a writer makes it: consistent counts and checksum.
+    fn consistent() -> Header {
+        let mut h = Header {
+            flags: 0,
+            scene_hash: 1,
+            settings: Settings {
+                mode: 2,
+                estimator: 0,
+                seed: 1,
+                n_max: 1000,
+                max_depth: 15,
+                split_cap: 4096,
+                analysis_hash: 2,
+            },
+            shard_index: 1,
+            shard_count: 2,
+            merged_from: 0,
+            photons: 10,
+            emitted: 500,
+            emitted_total: 1000,
+            frame_min: Vec3::ZERO,
+            frame_max: Vec3::ONE,
+            power_scale: 64.0,
+            photon_sum: 1234,
+            map_checksum: 0,
+            clamped: 0,
+            skipped: 0,
+            depth_photons: [0; DEPTHS],
+            depth_power: [[0.0; 3]; DEPTHS],
+        };
+        h.depth_photons[0] = 6;
+        h.depth_photons[1] = 4;
+        h.depth_power[0] = [1.0, 2.0, 3.0];
+        h.map_checksum = reseal(&h);
+        h
+    }
+
+    fn reseal(h: &Header) -> u64 {
+        super::super::MapHash {
+            count: h.photons,
+            sum: h.photon_sum,
+        }
+        .checksum(&h.frame())
+    }
+
+    #[test]
+    fn validate_refuses_every_field_out_of_range() {
+        consistent().validate().unwrap();
+        type Mutation = fn(&mut Header);
+        let cases: [(Mutation, &str); 14] = [
+            (|h| h.flags = 8, "unknown flags"),
+            (|h| h.settings.mode = 3, "unknown mode"),
+            (|h| h.settings.split_cap = 0, "split cap"),
+            (|h| h.shard_count = 0, "shard 1/0"),
+            (|h| h.shard_index = 2, "shard 2/2"),
+            (|h| h.merged_from = 2, "unmerged shard"),
+            (|h| h.flags = FLAG_MERGED, "merged map"),
+            (|h| h.emitted = 1001, "above the run's total"),
+            (|h| h.frame_min.x = f32::NAN, "frame bounds"),
+            (|h| h.frame_max.y = -1.0, "frame bounds"),
+            (|h| h.power_scale = f32::INFINITY, "power scale"),
+            (|h| h.power_scale = 3.4e38, "power scale"),
+            (|h| h.depth_photons[63] = u64::MAX, "per-depth counts"),
+            (|h| h.depth_power[5][1] = f64::NAN, "depth 5"),
+        ];
+        for (mutate, expect) in cases {
+            let mut h = consistent();
+            mutate(&mut h);
+            // Resealed: the checks do not lean on the checksum alone.
+            h.map_checksum = reseal(&h);
+            let e = h.validate().unwrap_err().to_string();
+            assert!(e.contains(expect), "expected `{expect}` in `{e}`");
+        }
+        let mut h = consistent();
+        h.photon_sum ^= 1;
+        let e = h.validate().unwrap_err().to_string();
+        assert!(e.contains("map checksum"), "{e}");
     }
 }

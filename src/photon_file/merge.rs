@@ -23,29 +23,56 @@ fn refuse(why: String) -> Error {
     Error::param("merge", why)
 }
 
-/// Opens every shard and checks they form one whole run; returns them in shard order.
-fn check_shards(inputs: &[PathBuf]) -> Result<Vec<PhotonReader>> {
+/// One shard to merge: its path and its (validated) header.
+struct ShardFile<'a> {
+    path: &'a Path,
+    header: Header,
+}
+
+/// The header fields every shard of one run shares, bit for bit (a frame
+/// compared as floats would call two NaN frames different runs).
+fn run_identity(h: &Header) -> (u64, [u32; 7], u64) {
+    let f = |v: f32| v.to_bits();
+    let (lo, hi) = (h.frame_min, h.frame_max);
+    let frame = [
+        f(lo.x),
+        f(lo.y),
+        f(lo.z),
+        f(hi.x),
+        f(hi.y),
+        f(hi.z),
+        f(h.power_scale),
+    ];
+    (h.scene_hash, frame, h.emitted_total)
+}
+
+/// Reads every shard's header (each file is closed again: a merge of many
+/// shards holds one open file at a time) and checks they form one whole run:
+/// the same scene, settings and frame, the shard count equal to the number of
+/// files given, every index once. Returns them in shard order.
+fn check_shards(inputs: &[PathBuf]) -> Result<Vec<ShardFile<'_>>> {
     let Some(first) = inputs.first() else {
         return Err(refuse("no shard given".into()));
     };
-    let mut readers: Vec<PhotonReader> = Vec::with_capacity(inputs.len());
-    let h0 = PhotonReader::open(first)?.header().clone();
-    if h0.flags & FLAG_MERGED != 0 {
-        return Err(refuse(format!(
-            "{} is already a merged map",
-            first.display()
-        )));
-    }
-    let n = h0.shard_count;
-    let mut seen: Vec<Option<&Path>> = vec![None; n as usize];
+    let mut shards = Vec::with_capacity(inputs.len());
     for path in inputs {
-        let r = PhotonReader::open(path)?;
-        let h = r.header();
+        let header = PhotonReader::open(path)?.header().clone();
+        if header.flags & FLAG_MERGED != 0 {
+            return Err(refuse(format!(
+                "{} is already a merged map",
+                path.display()
+            )));
+        }
+        shards.push(ShardFile { path, header });
+    }
+    let h0 = &shards[0].header;
+    for s in &shards[1..] {
+        let h = &s.header;
         let other = |what: &str| {
             refuse(format!(
                 "{} and {} are shards of different {what}",
                 first.display(),
-                path.display()
+                s.path.display()
             ))
         };
         if h.scene_hash != h0.scene_hash {
@@ -56,77 +83,107 @@ fn check_shards(inputs: &[PathBuf]) -> Result<Vec<PhotonReader>> {
                 "settings (mode, seed, N_MAX, depth, split cap or analysis)",
             ));
         }
-        if (h.frame_min, h.frame_max, h.power_scale) != (h0.frame_min, h0.frame_max, h0.power_scale)
-            || h.emitted_total != h0.emitted_total
-        {
-            return Err(other("runs (their emission differs)"));
+        if run_identity(h) != run_identity(h0) {
+            return Err(other("runs (their frame or total emission differs)"));
         }
-        if h.shard_count != n {
+        if h.shard_count != h0.shard_count {
             return Err(refuse(format!(
                 "{} is shard {}/{} but {} is shard {}/{}",
                 first.display(),
                 h0.shard_index,
-                n,
-                path.display(),
+                h0.shard_count,
+                s.path.display(),
                 h.shard_index,
                 h.shard_count
             )));
         }
-        let i = h.shard_index as usize;
-        if i >= seen.len() {
-            return Err(refuse(format!(
-                "{}: shard index {i} out of 0..{n}",
-                path.display()
-            )));
-        }
-        if let Some(p) = seen[i] {
-            return Err(refuse(format!(
-                "shard {i}/{n} given twice: {} and {}",
-                p.display(),
-                path.display()
-            )));
-        }
-        seen[i] = Some(path);
-        readers.push(r);
     }
-    let missing: Vec<String> = (0..n as usize)
-        .filter(|&i| seen[i].is_none())
-        .map(|i| i.to_string())
-        .collect();
-    if !missing.is_empty() {
-        return Err(refuse(format!(
-            "missing shard(s) {} of {n}",
-            missing.join(", ")
-        )));
-    }
-    readers.sort_by_key(|r| r.header().shard_index);
-    Ok(readers)
+    let n = h0.shard_count;
+    shards.sort_by_key(|s| s.header.shard_index);
+    check_each_index_once(&shards, n)?;
+    Ok(shards)
 }
 
-/// The merged header, from the shards' headers.
-fn merged_header(readers: &[PhotonReader]) -> Header {
-    let mut h = readers[0].header().clone();
+/// Checks that `sorted` (by index, every index below `n`: the headers are
+/// validated) holds each of `0..n` once. Never allocates from `n`, which
+/// comes from a file.
+fn check_each_index_once(sorted: &[ShardFile], n: u32) -> Result<()> {
+    for w in sorted.windows(2) {
+        if w[0].header.shard_index == w[1].header.shard_index {
+            return Err(refuse(format!(
+                "shard {}/{n} given twice: {} and {}",
+                w[0].header.shard_index,
+                w[0].path.display(),
+                w[1].path.display()
+            )));
+        }
+    }
+    if sorted.len() as u64 == n as u64 {
+        return Ok(());
+    }
+    // Distinct indices below n, fewer than n of them: list the first gaps.
+    const SHOWN: usize = 10;
+    let mut given = sorted.iter().map(|s| s.header.shard_index).peekable();
+    let mut missing = Vec::new();
+    for i in 0..n {
+        if given.peek() == Some(&i) {
+            given.next();
+        } else {
+            missing.push(i.to_string());
+            if missing.len() == SHOWN {
+                break;
+            }
+        }
+    }
+    let absent = n as u64 - sorted.len() as u64;
+    let more = if absent > SHOWN as u64 {
+        format!(" and {} more", absent - SHOWN as u64)
+    } else {
+        String::new()
+    };
+    Err(refuse(format!(
+        "missing shard(s) {}{more} of {n}",
+        missing.join(", ")
+    )))
+}
+
+/// Adds a shard's counter to the merged one; a sum past `u64::MAX` cannot
+/// come from real shards.
+fn add_count(total: &mut u64, add: u64, what: &str, path: &Path) -> Result<()> {
+    *total = total.checked_add(add).ok_or_else(|| {
+        refuse(format!(
+            "the shards' {what} overflow 64 bits at {} (corrupt headers)",
+            path.display()
+        ))
+    })?;
+    Ok(())
+}
+
+/// The merged header, from the shards' headers, with checked sums.
+fn merged_header(shards: &[ShardFile]) -> Result<Header> {
+    let mut h = shards[0].header.clone();
     h.flags = FLAG_MERGED;
     h.shard_index = 0;
     h.shard_count = 1;
-    h.merged_from = readers.len() as u32;
+    h.merged_from = u32::try_from(shards.len())
+        .map_err(|_| refuse(format!("{} shards: at most u32::MAX", shards.len())))?;
     let (mut photons, mut emitted, mut clamped, mut skipped) = (0u64, 0u64, 0u64, 0u64);
     let mut sum = MapHash::default();
     h.depth_photons = [0; DEPTHS];
     h.depth_power = [[0.0; 3]; DEPTHS];
-    for r in readers {
-        let s = r.header();
+    for shard in shards {
+        let (s, path) = (&shard.header, shard.path);
         h.flags |= s.flags & FLAG_BUDGET_BOUND;
-        photons += s.photons;
-        emitted += s.emitted;
-        clamped += s.clamped;
-        skipped += s.skipped;
+        add_count(&mut photons, s.photons, "photon counts", path)?;
+        add_count(&mut emitted, s.emitted, "emitted counts", path)?;
+        add_count(&mut clamped, s.clamped, "clamped counts", path)?;
+        add_count(&mut skipped, s.skipped, "skipped counts", path)?;
         sum.combine(&MapHash {
             count: s.photons,
             sum: s.photon_sum,
         });
         for (a, b) in h.depth_photons.iter_mut().zip(&s.depth_photons) {
-            *a += b;
+            add_count(a, *b, "per-depth counts", path)?;
         }
         for (a, b) in h
             .depth_power
@@ -137,13 +194,23 @@ fn merged_header(readers: &[PhotonReader]) -> Header {
             *a += b;
         }
     }
+    // The shards of one run emit its total between them, exactly.
+    if emitted != h.emitted_total {
+        return Err(refuse(format!(
+            "the shards emitted {emitted} photons together, but their run emits {}",
+            h.emitted_total
+        )));
+    }
     h.photons = photons;
     h.emitted = emitted;
     h.clamped = clamped;
     h.skipped = skipped;
     h.photon_sum = sum.sum;
     h.map_checksum = sum.checksum(&h.frame());
-    h
+    // Sums of finite powers may still overflow f64: check the result as a reader would.
+    h.validate()
+        .map_err(|e| refuse(format!("the merged header is invalid: {e}")))?;
+    Ok(h)
 }
 
 /// Merges `inputs` (every shard of one run, in any order) into `out`.
@@ -153,10 +220,13 @@ fn merged_header(readers: &[PhotonReader]) -> Header {
 /// [`Error::InvalidParameter`] (`merge` or `photon file`) for shards of
 /// different scenes or settings, a missing or duplicate shard, a truncated or
 /// corrupt file (including photons that do not hash to what their header
-/// says); [`Error::Io`] when a file cannot be read or written.
+/// says, and any header field out of range: [`Header::validate`]), counters
+/// whose sum overflows, or emitted counts that do not add up to the run's
+/// total; [`Error::Io`] when a file cannot be read or written, or is not a
+/// regular file.
 pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
-    let mut readers = check_shards(inputs)?;
-    let header = merged_header(&readers);
+    let shards = check_shards(inputs)?;
+    let header = merged_header(&shards)?;
     let mut output = AtomicOutput::create(out)?;
     let io = |source| Error::Io {
         path: out.to_path_buf(),
@@ -168,24 +238,21 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
     file_hash.update(&hb);
     w.write_all(&hb).map_err(io)?;
     let mut total = MapHash::default();
-    for r in &mut readers {
-        let announced = MapHash {
-            count: r.header().photons,
-            sum: r.header().photon_sum,
-        };
-        let index = r.header().shard_index;
-        let mut got = MapHash::default();
+    for shard in &shards {
+        // Reopened one at a time; the reader checks the photons against the
+        // header (both checksums) once the last chunk is read.
+        let mut r = PhotonReader::open(shard.path)?;
+        if r.header() != &shard.header {
+            return Err(refuse(format!(
+                "{} changed during the merge",
+                shard.path.display()
+            )));
+        }
         while let Some(bytes) = r.next_bytes()? {
-            photons_of(bytes).for_each(|p| got.add(&p));
+            photons_of(bytes).for_each(|p| total.add(&p));
             file_hash.update(bytes);
             w.write_all(bytes).map_err(io)?;
         }
-        if got != announced {
-            return Err(refuse(format!(
-                "shard {index}: its photons do not match its header (corrupt)"
-            )));
-        }
-        total.combine(&got);
     }
     w.write_all(&TRAILER_MAGIC).map_err(io)?;
     w.write_all(&file_hash.value().to_le_bytes()).map_err(io)?;

@@ -26,8 +26,8 @@ pub use frame::{
     canonical_frame, photons_checksum, scene_hash, settings_hash, ByteHash, CanonicalFrame, MapHash,
 };
 pub use header::{
-    Header, Settings, DEPTHS, FLAG_BUDGET_BOUND, FLAG_MERGED, HEADER_SIZE, MAGIC, TRAILER_MAGIC,
-    VERSION,
+    Header, Settings, DEPTHS, FLAG_BUDGET_BOUND, FLAG_MERGED, HEADER_SIZE, MAGIC, MAX_POWER_SCALE,
+    TRAILER_MAGIC, VERSION,
 };
 pub use merge::{merge, MergeSummary};
 pub use reader::{read_map, read_render_maps, PhotonReader};

@@ -1,7 +1,7 @@
-//! Reading a photon file as a stream of chunks, checking its size up front and
-//! its checksum at the end.
+//! Reading a photon file as a stream of chunks, checking its header and size
+//! up front and its checksums at the end.
 
-use super::frame::ByteHash;
+use super::frame::{ByteHash, MapHash};
 use super::header::{Header, HEADER_SIZE, TRAILER_MAGIC};
 use super::{PHOTON_SIZE, TRAILER_SIZE};
 use crate::error::{Error, Result};
@@ -21,27 +21,27 @@ pub struct PhotonReader {
     header: Header,
     left: u64,
     hash: ByteHash,
+    photons_hash: MapHash,
     buf: Vec<u8>,
     verified: bool,
 }
 
 impl PhotonReader {
-    /// Opens `path` and checks its header and its length (a truncated or
-    /// padded file is refused here, before any photon is read).
+    /// Opens `path` and checks its header ([`Header::validate`]) and its
+    /// length (a truncated or padded file is refused here, before any photon
+    /// is read).
     ///
     /// # Errors
-    /// [`Error::Io`] when it cannot be read; [`Error::InvalidParameter`]
-    /// (`photon file`) for a bad header or a wrong length.
+    /// [`Error::Io`] when it cannot be read or is not a regular file (a FIFO
+    /// is refused without blocking: [`crate::input::open_regular_file`]);
+    /// [`Error::InvalidParameter`] (`photon file`) for a bad header or a
+    /// wrong length.
     pub fn open(path: &Path) -> Result<Self> {
         let io = |source| Error::Io {
             path: path.to_path_buf(),
             source,
         };
-        let file = File::open(path).map_err(io)?;
-        let meta = file.metadata().map_err(io)?;
-        if !meta.is_file() {
-            return Err(io(std::io::Error::other("not a regular file")));
-        }
+        let (file, meta) = crate::input::open_regular_file(path)?;
         let bad = |why: String| Error::param("photon file", format!("{}: {why}", path.display()));
         let len = meta.len();
         if len < HEADER_SIZE as u64 + TRAILER_SIZE {
@@ -50,7 +50,13 @@ impl PhotonReader {
         let mut file = BufReader::with_capacity(1 << 20, file);
         let mut hb = vec![0u8; HEADER_SIZE];
         file.read_exact(&mut hb).map_err(io)?;
-        let header = Header::from_bytes(&hb).map_err(|e| bad(e.to_string()))?;
+        let header = Header::from_bytes(&hb)
+            .and_then(|h| h.validate().map(|()| h))
+            .map_err(|e| match e {
+                // Named once, with the file: not "photon file: photon file: ...".
+                Error::InvalidParameter { reason, .. } => bad(reason),
+                other => other,
+            })?;
         let expected = header
             .photons
             .checked_mul(PHOTON_SIZE)
@@ -70,6 +76,7 @@ impl PhotonReader {
             left: header.photons,
             header,
             hash,
+            photons_hash: MapHash::default(),
             buf: Vec::new(),
             verified: false,
         })
@@ -101,6 +108,7 @@ impl PhotonReader {
         self.buf.resize((n * PHOTON_SIZE) as usize, 0);
         self.file.read_exact(&mut self.buf).map_err(io)?;
         self.hash.update(&self.buf);
+        photons_of(&self.buf).for_each(|p| self.photons_hash.add(&p));
         self.left -= n;
         Ok(Some(&self.buf))
     }
@@ -113,14 +121,26 @@ impl PhotonReader {
         })?;
         self.buf = Vec::new();
         let stored = u64::from_le_bytes([t[8], t[9], t[10], t[11], t[12], t[13], t[14], t[15]]);
-        if t[..8] != TRAILER_MAGIC || stored != self.hash.value() {
-            return Err(Error::param(
+        let corrupt = |what: &str| {
+            Error::param(
                 "photon file",
                 format!(
-                    "{}: checksum mismatch (the file is corrupt)",
+                    "{}: {what} checksum mismatch (the file is corrupt)",
                     self.path.display()
                 ),
-            ));
+            )
+        };
+        if t[..8] != TRAILER_MAGIC || stored != self.hash.value() {
+            return Err(corrupt("file"));
+        }
+        // The photons must also be those the header's map checksum describes
+        // (a file resealed after editing its photons or its header).
+        let announced = MapHash {
+            count: self.header.photons,
+            sum: self.header.photon_sum,
+        };
+        if self.photons_hash != announced {
+            return Err(corrupt("photon"));
         }
         self.verified = true;
         Ok(())
@@ -140,47 +160,80 @@ pub(crate) fn photons_of(bytes: &[u8]) -> impl Iterator<Item = CompactPhoton> + 
 }
 
 /// Reads a whole photon file into a kd-tree photon map, keeping the photons
-/// that `keep` accepts, checking the checksum.
+/// that `keep` accepts, checking the checksums.
 ///
 /// # Errors
 /// As [`PhotonReader::open`] and [`PhotonReader::next_bytes`];
-/// [`Error::InvalidParameter`] for a map over `u32::MAX` photons.
+/// [`Error::InvalidParameter`] for a map over `u32::MAX` photons or one whose
+/// memory cannot be reserved.
 pub fn read_map(path: &Path, keep: impl Fn(&CompactPhoton) -> bool) -> Result<(Header, PhotonMap)> {
-    let mut r = PhotonReader::open(path)?;
+    read_open_map(PhotonReader::open(path)?, keep)
+}
+
+/// [`read_map`] from an open reader.
+fn read_open_map(
+    mut r: PhotonReader,
+    keep: impl Fn(&CompactPhoton) -> bool,
+) -> Result<(Header, PhotonMap)> {
     let header = r.header().clone();
+    let bad = |why: String| Error::param("photon file", format!("{}: {why}", r.path.display()));
     if header.photons > u32::MAX as u64 {
-        return Err(Error::param(
-            "photon file",
-            format!("{} photons: a map holds at most u32::MAX", header.photons),
-        ));
+        return Err(bad(format!(
+            "{} photons: a map holds at most u32::MAX",
+            header.photons
+        )));
     }
-    let mut photons = Vec::with_capacity(header.photons as usize);
+    let mut photons = Vec::new();
+    // The count is bounded by the file's length, not by memory: reserve
+    // fallibly so that a map too large for this machine is an error.
+    photons
+        .try_reserve_exact(header.photons as usize)
+        .map_err(|_| {
+            bad(format!(
+                "not enough memory for its {} photons",
+                header.photons
+            ))
+        })?;
     while let Some(bytes) = r.next_bytes()? {
         photons.extend(photons_of(bytes).filter(|p| keep(p)));
     }
-    Ok((
-        header.clone(),
-        PhotonMap::from_compact(photons, header.frame()),
-    ))
+    let frame = header.frame();
+    Ok((header, PhotonMap::from_compact(photons, frame)))
 }
 
-/// The three maps a render reads, from a (merged) map file of `scene`.
+/// The three maps a render reads, from a map file of `scene`: a merged map,
+/// or the photon file of a whole (unsharded) run.
 ///
 /// # Errors
 /// As [`read_map`]; [`Error::InvalidParameter`] when the file was traced in
-/// another scene.
+/// another scene, or is one shard of a sharded run (its photons carry their
+/// share of the whole run's power: alone they would give a fraction of the
+/// light, so every shard must be merged first).
 pub fn read_render_maps(
     path: &Path,
     scene: &crate::scene::Scene,
 ) -> Result<(Header, crate::render::RenderMaps)> {
-    let header = PhotonReader::open(path)?.header().clone();
+    let reader = PhotonReader::open(path)?;
+    let header = reader.header();
+    if header.shard_count != 1 {
+        return Err(Error::param(
+            "photon file",
+            format!(
+                "{} is shard {}/{} of a run, not a whole map: merge every shard first \
+                 (adaptive-pm merge SHARD.apm... --out MAP.apm)",
+                path.display(),
+                header.shard_index,
+                header.shard_count
+            ),
+        ));
+    }
     if header.scene_hash != super::scene_hash(scene) {
         return Err(Error::param(
             "photon file",
             format!("{} was traced in another scene", path.display()),
         ));
     }
-    let (_, full) = read_map(path, |_| true)?;
+    let (header, full) = read_open_map(reader, |_| true)?;
     let (photons, frame) = full.into_compact();
     let photons = photons
         .into_iter()

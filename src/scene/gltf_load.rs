@@ -24,10 +24,11 @@ pub(super) fn load_path(path: &Path) -> Result<Scene> {
         path: path.to_path_buf(),
         source: e,
     };
-    let bytes = std::fs::read(path).map_err(|e| Error::Io {
-        path: path.to_path_buf(),
-        source: e,
-    })?;
+    // A scene file holds at most the buffers' 1 GiB limit, base64-encoded
+    // (4/3 larger) in `data:` URIs, plus its JSON: 2 GiB is ample. Only a
+    // regular file is read (a FIFO would block, `/dev/zero` never ends).
+    const MAX_SCENE_FILE_BYTES: u64 = 2 << 30;
+    let bytes = crate::input::read_regular_file(path, MAX_SCENE_FILE_BYTES)?;
     let base = path.parent().unwrap_or(Path::new("."));
     load_slice(&bytes, Some(base)).map_err(|e| match e {
         Error::Load { source, .. } => load_err(source),
