@@ -515,6 +515,47 @@ fn outputs_that_are_inputs_by_another_spelling_are_refused() {
     let run = run_limited(&["trace", s(&scene), "--n-max", "100", "--out", s(&spelled)]);
     refused(&run, &["also the input", "victim.gltf"]);
     assert_eq!(std::fs::read(&scene).unwrap(), scene_before);
+    // render: its EXR over the scene or the map, its PNG over its EXR.
+    let small = [
+        "--width", "8", "--height", "8", "--spp", "1", "--n-max", "100",
+    ];
+    let run = run_limited(&[&["render", s(&scene)][..], &small, &["--out", s(&spelled)]].concat());
+    refused(&run, &["also the input", "victim.gltf"]);
+    assert_eq!(std::fs::read(&scene).unwrap(), scene_before);
+    let map = d.join("map.apm");
+    let run = run_limited(&["merge", s(&s0), s(&s1), "--out", s(&map)]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let map_before = std::fs::read(&map).unwrap();
+    let spelled_map = pf.join("..").join("map.apm");
+    let run = run_limited(
+        &[
+            &["render", s(&scene), "--map", s(&map)][..],
+            &small,
+            &["--out", s(&spelled_map)],
+        ]
+        .concat(),
+    );
+    refused(&run, &["also the input", "map.apm"]);
+    assert_eq!(std::fs::read(&map).unwrap(), map_before);
+    let exr = d.join("same.exr");
+    let run = run_limited(
+        &[
+            &["render", s(&scene)][..],
+            &small,
+            &[
+                "--out",
+                s(&exr),
+                "--png",
+                s(&pf.join("..").join("same.exr")),
+            ],
+        ]
+        .concat(),
+    );
+    refused(&run, &["also the input", "same.exr"]);
 }
 
 #[test]

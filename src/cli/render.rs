@@ -4,6 +4,7 @@
 use super::common::{open_scene, progress_bar, BudgetArgs, ThreadArgs};
 use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Mode, Tracer};
+use adaptive_pm::output::refuse_overwrite;
 use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
     cache::DEFAULT_STRIDE, check_output_path, render_with, Image, Integrator, RenderConfig,
@@ -11,7 +12,7 @@ use adaptive_pm::render::{
 };
 use adaptive_pm::scene::PreparedScene;
 use serde_json::json;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Arguments of `render`.
@@ -108,6 +109,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     check_output_path(&args.out)?;
     if let Some(p) = &args.png {
         check_output_path(p)?;
+    }
+    // No output may replace an input or the other output, however spelled.
+    let mut inputs = vec![Path::new(&args.scene)];
+    inputs.extend(args.map.as_deref());
+    refuse_overwrite(&args.out, &inputs)?;
+    if let Some(p) = &args.png {
+        inputs.push(&args.out);
+        refuse_overwrite(p, &inputs)?;
     }
     let pool = args.threads.pool()?;
     let device = Device::new()?;
