@@ -242,3 +242,65 @@ fn gltf_files_that_loaded_wrong_in_silence_are_refused() {
         "{msg}"
     );
 }
+
+/// A GLB file of tests/hostile/base.gltf's JSON (its buffer is a data: URI)
+/// and `more` chunks after it, then `tail`; `declared` overrides the
+/// header's total length.
+fn glb(more: &[(u32, &[u8])], tail: &[u8], declared: Option<u32>) -> Vec<u8> {
+    let base = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/hostile/base.gltf");
+    let mut json = std::fs::read(base).unwrap();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let mut body = Vec::new();
+    for (kind, data) in std::iter::once((0x4E4F_534A, &json[..])).chain(more.iter().copied()) {
+        body.extend((data.len() as u32).to_le_bytes());
+        body.extend(kind.to_le_bytes());
+        body.extend(data);
+    }
+    body.extend(tail);
+    let total = declared.unwrap_or(12 + body.len() as u32);
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(total.to_le_bytes());
+    out.extend(body);
+    out
+}
+
+fn load_glb(bytes: &[u8]) -> adaptive_pm::Result<Scene> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.glb");
+    std::fs::write(&path, bytes).unwrap();
+    Scene::load(&path)
+}
+
+#[test]
+fn glb_files_whose_chunks_do_not_tile_the_file_are_refused() {
+    const BIN: u32 = 0x004E_4942;
+    load_glb(&glb(&[], &[], None)).unwrap();
+    load_glb(&glb(&[(BIN, &[0; 8])], &[], None)).unwrap();
+    let bad = [
+        // The header's length hid what follows it.
+        (
+            glb(&[], &[0; 16], Some(12 + 8)),
+            "the GLB header declares 20 bytes",
+        ),
+        // Bytes after the last chunk.
+        (glb(&[], &[1, 2, 3], None), "truncated header"),
+        // Two binary chunks: which one is the buffer?
+        (
+            glb(&[(BIN, &[0; 8]), (BIN, &[0; 8])], &[], None),
+            "at most one BIN chunk",
+        ),
+    ];
+    for (bytes, words) in bad {
+        let e = load_glb(&bytes).unwrap_err();
+        let msg = format!(
+            "{e}: {}",
+            std::error::Error::source(&e)
+                .map(ToString::to_string)
+                .unwrap_or_default()
+        );
+        assert!(msg.contains(words), "{msg}");
+    }
+}

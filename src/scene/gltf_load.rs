@@ -264,24 +264,60 @@ fn convert_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Resu
     }
 }
 
-/// The GLB header's declared length must cover the header itself and fit the
-/// file: the gltf crate subtracts the header size from it unchecked (found by
-/// the fuzzer: a declared length under 12 overflows, a panic in debug builds).
+/// A GLB file's layout, checked before the gltf crate reads it: the
+/// header's declared length is the file's (the crate subtracts the header
+/// size from it unchecked: a declared length under 12 overflowed, found by
+/// the fuzzer; a shorter one hid trailing bytes), and the chunks tile the
+/// rest: the JSON chunk first, at most one BIN chunk second, and chunks of
+/// other types (which readers skip) only after them.
 fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
+    const JSON: u32 = 0x4E4F_534A;
+    const BIN: u32 = 0x004E_4942;
     if !bytes.starts_with(b"glTF") {
         return Ok(());
     }
     let field = |at: usize| {
         bytes
             .get(at..at + 4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     };
-    match field(8) {
-        Some(length) if (12..=bytes.len()).contains(&length) => Ok(()),
-        Some(length) => Err(format!(
-            "the GLB header declares {length} bytes; the file has {} (at least 12 needed)",
+    let Some(length) = field(8) else {
+        return Err("the GLB file is shorter than its 12-byte header".into());
+    };
+    if length as usize != bytes.len() {
+        return Err(format!(
+            "the GLB header declares {length} bytes; the file has {}",
             bytes.len()
-        )),
-        None => Err("the GLB file is shorter than its 12-byte header".into()),
+        ));
     }
+    let mut at = 12usize;
+    let mut index = 0;
+    while at < bytes.len() {
+        let (Some(len), Some(kind)) = (field(at), field(at + 4)) else {
+            return Err(format!("GLB chunk {index} has a truncated header"));
+        };
+        let end = (at + 8).checked_add(len as usize).filter(|&e| e <= bytes.len());
+        let Some(end) = end else {
+            return Err(format!(
+                "GLB chunk {index} declares {len} bytes, past the end of the file"
+            ));
+        };
+        let allowed = match kind {
+            JSON => index == 0,
+            BIN => index == 1,
+            _ => index >= 1,
+        };
+        if !allowed {
+            return Err(format!(
+                "GLB chunk {index} has type {kind:#010x}: the JSON chunk must come first and \
+                 at most one BIN chunk second"
+            ));
+        }
+        at = end;
+        index += 1;
+    }
+    if index == 0 {
+        return Err("the GLB file has no JSON chunk".into());
+    }
+    Ok(())
 }
