@@ -296,7 +296,9 @@ fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
         let (Some(len), Some(kind)) = (field(at), field(at + 4)) else {
             return Err(format!("GLB chunk {index} has a truncated header"));
         };
-        let end = (at + 8).checked_add(len as usize).filter(|&e| e <= bytes.len());
+        let end = (at + 8)
+            .checked_add(len as usize)
+            .filter(|&e| e <= bytes.len());
         let Some(end) = end else {
             return Err(format!(
                 "GLB chunk {index} declares {len} bytes, past the end of the file"
