@@ -11,8 +11,9 @@
 //!   end.
 //!
 //! glTF buffer URIs follow the same rules in `scene::buffers`; every other
-//! reader of the crate and of the CLI (scenes, photon files, EXR tiles) goes
-//! through [`open_regular_file`] or [`read_regular_file`].
+//! reader of the crate and of the CLI (scenes, photon files, EXR images and
+//! tiles, the trade study's cache) goes through [`open_regular_file`] or
+//! [`read_regular_file`].
 
 use crate::error::{Error, Result};
 use std::fs::{File, Metadata};
@@ -103,12 +104,13 @@ pub fn read_regular_file(path: &Path, max_bytes: u64) -> Result<Vec<u8>> {
     }
     let mut bytes = Vec::new();
     let want = usize::try_from(meta.len()).map_err(|_| too_big())?;
-    bytes.try_reserve_exact(want).map_err(|_| {
-        invalid(
-            path,
-            format!("cannot reserve {want} bytes of memory to read it"),
-        )
-    })?;
+    bytes
+        .try_reserve_exact(want)
+        .map_err(|_| Error::OutOfMemory {
+            what: "reading a file",
+            bytes: want as u64,
+            budget_bytes: max_bytes,
+        })?;
     file.take(max_bytes.saturating_add(1))
         .read_to_end(&mut bytes)
         .map_err(|e| io_err(path, e))?;

@@ -11,6 +11,7 @@ use adaptive_pm::render::{
     RenderMaps, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
 };
 use adaptive_pm::scene::PreparedScene;
+use anyhow::Context;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -111,12 +112,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         check_output_path(p)?;
     }
     // No output may replace an input or the other output, however spelled.
-    let mut inputs = vec![Path::new(&args.scene)];
+    // (A built-in scene's name is no file.)
+    let scene_path = Path::new(&args.scene);
+    let mut inputs: Vec<&Path> = Vec::new();
+    inputs.extend(Some(scene_path).filter(|p| p.exists()));
     inputs.extend(args.map.as_deref());
-    refuse_overwrite(&args.out, &inputs)?;
+    refuse_overwrite(&args.out, &inputs).context("--out")?;
     if let Some(p) = &args.png {
         inputs.push(&args.out);
-        refuse_overwrite(p, &inputs)?;
+        refuse_overwrite(p, &inputs).context("--png")?;
     }
     let pool = args.threads.pool()?;
     let device = Device::new()?;

@@ -33,7 +33,13 @@ pub fn run_path(
         (image, stats.dropped_samples)
     };
     let secs = t.elapsed().as_secs_f64();
-    let samples = u64::from(cfg.width) * u64::from(image.height) * u64::from(cfg.spp);
+    // Two halves of spp / 2 each when spp >= 2 (an odd spp loses one).
+    let spp = if cfg.spp >= 2 {
+        cfg.spp / 2 * 2
+    } else {
+        cfg.spp
+    };
+    let samples = u64::from(cfg.width) * u64::from(image.height) * u64::from(spp);
     super::render::warn_dropped(dropped, samples);
     super::render::write_image(&image, cfg, args)?;
     if let Some(p) = &args.png {

@@ -69,7 +69,7 @@ pub fn max_threads() -> usize {
 pub fn default_threads() -> Result<usize> {
     let env = std::env::var("RAYON_NUM_THREADS").ok();
     // Rayon ignores a value that is not a positive integer; so do we.
-    match env.as_deref().map(str::trim).map(str::parse::<usize>) {
+    match env.as_deref().map(str::parse::<usize>) {
         Some(Ok(n)) if n > 0 => {
             let max = max_threads();
             if n > max {

@@ -280,7 +280,7 @@ impl<C: RayCaster> Tracer<C> {
         // The map buffer, reserved for what a diffuse scene typically
         // stores (about 2-3 hits per emitted photon) and grown when needed up
         // to the budget: a large buffer grows by mremap in glibc, without a
-        // copy. An allocation the OS refuses is a budget error, not an abort.
+        // copy. An allocation the OS refuses is `Error::OutOfMemory`, not an abort.
         let mut photons: Vec<CompactPhoton> = Vec::new();
         if density.is_none() {
             let guess = emitted.saturating_mul(3).min(max_photons) as usize;

@@ -188,11 +188,10 @@ fn read_open_map(
     // fallibly so that a map too large for this machine is an error.
     photons
         .try_reserve_exact(header.photons as usize)
-        .map_err(|_| {
-            bad(format!(
-                "not enough memory for its {} photons",
-                header.photons
-            ))
+        .map_err(|_| Error::OutOfMemory {
+            what: "a photon file's photons",
+            bytes: header.photons.saturating_mul(16),
+            budget_bytes: crate::engine::config::available_memory(),
         })?;
     while let Some(bytes) = r.next_bytes()? {
         photons.extend(photons_of(bytes).filter(|p| keep(p)));

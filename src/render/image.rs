@@ -167,20 +167,74 @@ impl Image {
 
     /// Reads the first RGB(A) layer of an OpenEXR file (alpha dropped).
     ///
+    /// The path must be a regular file (a FIFO would block,
+    /// [`crate::input`]), and the header is checked before any pixel is
+    /// allocated: a layer within [`check_dimensions`], and a file long
+    /// enough for the blocks of pixels it announces (a 1 KB header can claim
+    /// 30000 x 30000 pixels).
+    ///
     /// # Errors
-    /// [`Error::Io`] when the file is missing or not a readable EXR image.
+    /// [`Error::Io`] when the file is missing, not a regular file or not a
+    /// readable EXR image; [`Error::InvalidParameter`] for a size out of
+    /// range; [`Error::OutOfMemory`] when its pixels cannot be allocated.
     pub fn read_exr(path: impl AsRef<Path>) -> Result<Self> {
+        use exr::prelude::{read, ReadChannels, ReadLayers};
         let path = path.as_ref();
-        let img = exr::prelude::read_first_rgba_layer_from_file(
-            path,
-            |res, _| (res.width(), vec![Vec3::ZERO; res.width() * res.height()]),
-            |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-                px[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
-            },
-        )
-        .map_err(|e| io_err(path, exr_io(e)))?;
+        let (file, meta) = crate::input::open_regular_file(path)?;
+        let reader = exr::block::read(std::io::BufReader::new(file), false)
+            .map_err(|e| io_err(path, exr_io(e)))?;
+        let Some(h) = reader.headers().first() else {
+            return Err(io_err(path, std::io::Error::other("no layer")));
+        };
+        let (w, ht) = (h.layer_size.width(), h.layer_size.height());
+        check_dimensions(
+            u32::try_from(w).unwrap_or(u32::MAX),
+            u32::try_from(ht).unwrap_or(u32::MAX),
+        )?;
+        // Every block of pixels has at least its 8-byte offset-table entry.
+        let blocks: u64 = reader.headers().iter().map(|h| h.chunk_count as u64).sum();
+        if blocks.saturating_mul(8) > meta.len() {
+            return Err(io_err(
+                path,
+                std::io::Error::other("its header announces more pixels than the file holds"),
+            ));
+        }
+        let n = w * ht;
+        let mut buffer = Vec::new();
+        buffer
+            .try_reserve_exact(n)
+            .map_err(|_| Error::OutOfMemory {
+                what: "an EXR image's pixels",
+                bytes: n as u64 * 12,
+                budget_bytes: available_memory() / 4,
+            })?;
+        buffer.resize(n, Vec3::ZERO);
+        // The decoder asks for its buffer through a closure that cannot
+        // fail: hand it the one reserved above.
+        let buffer = std::cell::Cell::new(Some(buffer));
+        let img = read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .rgba_channels(
+                move |res, _| (res.width(), buffer.take().unwrap_or_default()),
+                |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                    if let Some(p) = px.get_mut(pos.y() * *w + pos.x()) {
+                        *p = Vec3::new(r, g, b);
+                    }
+                },
+            )
+            .first_valid_layer()
+            .all_attributes()
+            .from_chunks(reader)
+            .map_err(|e| io_err(path, exr_io(e)))?;
         let size = img.layer_data.size;
         let (_, pixels) = img.layer_data.channel_data.pixels;
+        if pixels.len() != size.width() * size.height() {
+            return Err(io_err(
+                path,
+                std::io::Error::other("its pixels do not match its header"),
+            ));
+        }
         Ok(Image {
             width: size.width() as u32,
             height: size.height() as u32,

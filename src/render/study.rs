@@ -106,6 +106,35 @@ pub struct StudyResult {
     pub ratio: Option<f64>,
 }
 
+/// Errors are measured against the reference with its noise taken out
+/// ([`noise_free`]): a reference noisier than the render it judges read
+/// that render as exact (relRMSE 0, 0 s to the target).
+fn check_reference_spp(reference_spp: u32, spp: u32) -> Result<()> {
+    if reference_spp / 2 < spp {
+        return Err(Error::param(
+            "reference_spp",
+            format!(
+                "{reference_spp} is less than twice the {spp} spp of the render it judges: \
+                 that render's error could not be told from the reference's noise"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A reference that left samples out is biased where they fell, and every
+/// error measured against it with it.
+fn check_reference_drops(halves: &PathHalves) -> Result<()> {
+    if halves.dropped_samples > 0 {
+        return Err(Error::InvalidScene(format!(
+            "the path-traced reference left out {} NaN or infinite samples \
+             (degenerate geometry, or radiance beyond f32)",
+            halves.dropped_samples
+        )));
+    }
+    Ok(())
+}
+
 fn noise_free(e: f64, noise: f64) -> f64 {
     (e * e - noise * noise).max(0.0).sqrt()
 }
@@ -134,19 +163,7 @@ pub fn run_study(
     // jittered edge of a bright light would dominate any image RMSE.
     base.show_emitters = false;
     base.validate()?;
-    // Errors are measured against the reference with its noise taken out
-    // (`noise_free`). A reference noisier than the path render read it as
-    // exact: relRMSE 0, 0 s to the target.
-    if cfg.reference_spp / 2 < cfg.path_spp {
-        return Err(Error::param(
-            "reference_spp",
-            format!(
-                "{} is less than twice the path render's {} spp: the path render's \
-                 error could not be told from the reference's noise",
-                cfg.reference_spp, cfg.path_spp
-            ),
-        ));
-    }
+    check_reference_spp(cfg.reference_spp, cfg.path_spp)?;
     let keep: Vec<bool> = light_pixels(scene, rt, &base)?.iter().map(|l| !l).collect();
 
     let t = Instant::now();
@@ -162,13 +179,7 @@ pub fn run_study(
         cfg.reference_spp,
         100.0 * reference_noise
     ));
-    if halves.dropped_samples > 0 {
-        return Err(Error::InvalidScene(format!(
-            "the path-traced reference left out {} NaN or infinite samples \
-             (degenerate geometry, or radiance beyond f32)",
-            halves.dropped_samples
-        )));
-    }
+    check_reference_drops(&halves)?;
 
     let mut pc = base.clone();
     pc.spp = cfg.path_spp;
@@ -345,24 +356,13 @@ pub fn run_direct_study(
     base.seed = cfg.seed;
     base.show_emitters = false;
     base.validate()?;
-    // Errors are measured against the reference with its noise taken out
-    // (`noise_free`). A reference noisier than the path render read it as
-    // exact: relRMSE 0, 0 s to the target.
-    if cfg.reference_spp / 2 < cfg.path_spp {
-        return Err(Error::param(
-            "reference_spp",
-            format!(
-                "{} is less than twice the path render's {} spp: the path render's \
-                 error could not be told from the reference's noise",
-                cfg.reference_spp, cfg.path_spp
-            ),
-        ));
-    }
+    check_reference_spp(cfg.reference_spp, spp)?;
     let keep: Vec<bool> = light_pixels(scene, rt, &base)?.iter().map(|l| !l).collect();
     let mut rc = base.clone();
     rc.spp = (cfg.reference_spp / 2).max(1);
     rc.seed = cfg.seed ^ 0xD1_2EC7;
     let halves = PathHalves::render(scene, rt, &rc, PathPart::Direct)?;
+    check_reference_drops(&halves)?;
     let reference = halves.mean();
     let noise = halves.noise_rel(Some(&keep));
     let row = |renderer, light_samples, seconds: f64, img: &Image| -> Result<DirectRow> {

@@ -268,8 +268,10 @@ fn convert_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Resu
 /// header's declared length is the file's (the crate subtracts the header
 /// size from it unchecked: a declared length under 12 overflowed, found by
 /// the fuzzer; a shorter one hid trailing bytes), and the chunks tile the
-/// rest: the JSON chunk first, at most one BIN chunk second, and chunks of
-/// other types (which readers skip) only after them.
+/// rest: the JSON chunk first, at most one BIN chunk second. The spec lets
+/// chunks of other types follow, for readers to skip; the gltf crate skips
+/// them only after a BIN chunk, so one right after the JSON chunk is
+/// refused here with a clear message rather than the crate's.
 fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
     const JSON: u32 = 0x4E4F_534A;
     const BIN: u32 = 0x004E_4942;
@@ -307,12 +309,13 @@ fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
         let allowed = match kind {
             JSON => index == 0,
             BIN => index == 1,
-            _ => index >= 1,
+            _ => index >= 2,
         };
         if !allowed {
             return Err(format!(
-                "GLB chunk {index} has type {kind:#010x}: the JSON chunk must come first and \
-                 at most one BIN chunk second"
+                "GLB chunk {index} has type {kind:#010x}: the JSON chunk must come first, \
+                 at most one BIN chunk second, and other chunks (unsupported right after \
+                 the JSON chunk) only after them"
             ));
         }
         at = end;

@@ -452,10 +452,12 @@ impl Scene {
         (lo, hi)
     }
 
-    /// Checks the scene can be traced.
+    /// Checks the scene can be traced and rendered.
     ///
     /// # Errors
-    /// [`Error::InvalidScene`] when it has no light or no triangle.
+    /// [`Error::InvalidScene`] when it has no light or no triangle, when
+    /// the lights' total power is above [`MAX_LIGHT_POWER`] in some
+    /// channel, or when every light is dark.
     pub fn validate(&self) -> Result<()> {
         if self.lights.is_empty() {
             return Err(Error::InvalidScene(

@@ -326,8 +326,8 @@ fn check_node(root: &Root, i: usize, n: &json::Node, lights: usize) -> Result<()
     if !finite {
         return Err(bad(format!("{name} has a non-finite transform")));
     }
-    // glTF rotations are unit quaternions; another length scaled the
-    // geometry by its square, silently.
+    // glTF rotations are unit quaternions; the matrix the gltf crate makes
+    // of another is no rotation (it distorted the mesh, silently).
     if let Some(q) = n.rotation.map(|q| q.0) {
         let len = q.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>().sqrt();
         if (len - 1.0).abs() > 1e-3 {
