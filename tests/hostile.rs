@@ -8,6 +8,8 @@ use adaptive_pm::error::Error;
 use adaptive_pm::scene::Scene;
 use std::path::{Path, PathBuf};
 
+mod common;
+
 fn dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/hostile")
 }
@@ -16,15 +18,7 @@ fn dir() -> PathBuf {
 fn error_of(path: &Path) -> String {
     match Scene::load(path) {
         Ok(_) => panic!("{} loaded, but it is hostile", path.display()),
-        Err(e) => {
-            let mut msg = e.to_string();
-            let mut src = std::error::Error::source(&e);
-            while let Some(s) = src {
-                msg += &format!(": {s}");
-                src = s.source();
-            }
-            msg
-        }
+        Err(e) => common::chain(&e),
     }
 }
 

@@ -7,12 +7,10 @@ use adaptive_pm::engine::Shard;
 use adaptive_pm::output::{check_target, refuse_overwrite};
 use adaptive_pm::photon_file::AtomicOutput;
 use adaptive_pm::render::image::check_dimensions;
-use adaptive_pm::render::{Image, MAX_DIMENSION};
+use adaptive_pm::render::{ExrFile, Image, MAX_DIMENSION};
 use anyhow::{bail, Context};
 use exr::prelude::*;
 use glam::Vec3;
-use std::fs::File;
-use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `assemble`.
@@ -73,37 +71,21 @@ struct Placement {
     rows: usize,
 }
 
-/// An EXR file opened past its header, its pixels not yet read.
-type TileReader = exr::block::reader::Reader<BufReader<File>>;
-
-/// Opens a tile (a regular file only: a FIFO would block) and reads its
-/// header, checking where its rows sit before any pixel is allocated.
-fn open_tile(path: &Path) -> anyhow::Result<(TileReader, Placement)> {
-    let (file, meta) = adaptive_pm::input::open_regular_file(path)?;
-    let reader = exr::block::read(BufReader::new(file), false)
-        .with_context(|| format!("reading tile {}", path.display()))?;
-    let placement = placement_of(path, reader.headers(), meta.len())?;
-    Ok((reader, placement))
+/// Opens a tile (header only: [`ExrFile`]) and checks where its rows sit,
+/// before any pixel is allocated.
+fn open_tile(path: &Path) -> anyhow::Result<(ExrFile, Placement)> {
+    let exr = ExrFile::open(path).with_context(|| format!("reading tile {}", path.display()))?;
+    let placement = placement_of(path, &exr)?;
+    Ok((exr, placement))
 }
 
 /// Checks a tile's header: one layer of whole rows of an image within
-/// [`MAX_DIMENSION`] a side, and a file long enough for the blocks of pixels
-/// its header announces (a 1 KB file claiming 30000x30000 pixels made the
-/// decoder allocate 10.8 GB).
-fn placement_of(
-    path: &Path,
-    headers: &[exr::meta::header::Header],
-    len: u64,
-) -> anyhow::Result<Placement> {
-    let [h] = headers else {
-        bail!(
-            "{}: {} layers; a tile has one",
-            path.display(),
-            headers.len()
-        );
-    };
-    let d = h.shared_attributes.display_window;
-    let (w, ht) = (d.size.width(), d.size.height());
+/// [`MAX_DIMENSION`] a side.
+fn placement_of(path: &Path, exr: &ExrFile) -> anyhow::Result<Placement> {
+    if exr.layers != 1 {
+        bail!("{}: {} layers; a tile has one", path.display(), exr.layers);
+    }
+    let (w, ht) = exr.display;
     let max = MAX_DIMENSION as usize;
     if w == 0 || ht == 0 || w > max || ht > max {
         bail!(
@@ -111,30 +93,20 @@ fn placement_of(
             path.display()
         );
     }
-    let pos = h.own_attributes.layer_position;
-    let size = h.layer_size;
-    if d.position != Vec2(0, 0) || pos.x() != 0 || size.width() != w {
+    let (x, y) = exr.layer_position;
+    if x != 0 || exr.layer_size.0 != w {
         bail!(
             "{}: not a tile of whole rows (render --tile)",
             path.display()
         );
     }
-    if pos.y() < 0 || pos.y() as usize + size.height() > ht {
+    if y < 0 || y as usize + exr.layer_size.1 > ht {
         bail!("{}: its rows lie outside its image", path.display());
-    }
-    // Every block of pixels has at least its 8-byte entry in the offset table.
-    if (h.chunk_count as u64).saturating_mul(8) > len {
-        bail!(
-            "{}: its header announces {} blocks of pixels, more than its {len} bytes can hold \
-             (truncated or corrupt)",
-            path.display(),
-            h.chunk_count
-        );
     }
     Ok(Placement {
         display: (w, ht),
-        y0: pos.y() as usize,
-        rows: size.height(),
+        y0: y as usize,
+        rows: exr.layer_size.1,
     })
 }
 
@@ -145,36 +117,6 @@ fn black_pixels(n: usize) -> anyhow::Result<Vec<Vec3>> {
         .map_err(|_| anyhow::anyhow!("not enough memory for {n} pixels"))?;
     px.resize(n, Vec3::ZERO);
     Ok(px)
-}
-
-/// Decodes the pixels of a tile checked by [`open_tile`].
-fn read_pixels(reader: TileReader, path: &Path, at: Placement) -> anyhow::Result<Vec<Vec3>> {
-    let n = at.display.0 * at.rows;
-    // The decoder asks for its buffer through a closure that cannot fail:
-    // hand it the one reserved above.
-    let buffer = std::cell::Cell::new(Some(black_pixels(n)?));
-    let img = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            move |res, _| (res.width(), buffer.take().unwrap_or_default()),
-            |(w, px): &mut (usize, Vec<Vec3>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-                if let Some(p) = px.get_mut(pos.y() * *w + pos.x()) {
-                    *p = Vec3::new(r, g, b);
-                }
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_chunks(reader)
-        .with_context(|| format!("reading tile {}", path.display()))?;
-    let (_, pixels) = img.layer_data.channel_data.pixels;
-    anyhow::ensure!(
-        pixels.len() == n,
-        "{}: its pixels do not match its header",
-        path.display()
-    );
-    Ok(pixels)
 }
 
 /// Checks that the tiles (sorted by first row) are of one image and cover
@@ -225,7 +167,10 @@ pub fn run(args: AssembleArgs) -> anyhow::Result<()> {
             bail!("{} changed while the tiles were assembled", p.display());
         }
         let start = at.y0 * w;
-        pixels[start..start + w * at.rows].copy_from_slice(&read_pixels(reader, p, *at)?);
+        let rows = reader
+            .read_pixels()
+            .with_context(|| format!("reading tile {}", p.display()))?;
+        pixels[start..start + w * at.rows].copy_from_slice(&rows);
     }
     let image = Image {
         width: w as u32,

@@ -58,6 +58,18 @@ pub fn max_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get()) * MAX_THREADS_PER_CORE
 }
 
+/// `n` when it is at most [`max_threads`]; else an error naming `name`.
+fn within_max(name: &'static str, n: usize) -> Result<usize> {
+    let max = max_threads();
+    if n > max {
+        return Err(Error::param(
+            name,
+            format!("{n} is more than {MAX_THREADS_PER_CORE} per available core (at most {max})"),
+        ));
+    }
+    Ok(n)
+}
+
 /// The workers a pool of "0 threads" gets: `RAYON_NUM_THREADS` when it is
 /// set to a positive count (rayon's own convention), else one per available
 /// core.
@@ -70,18 +82,7 @@ pub fn default_threads() -> Result<usize> {
     let env = std::env::var("RAYON_NUM_THREADS").ok();
     // Rayon ignores a value that is not a positive integer; so do we.
     match env.as_deref().map(str::parse::<usize>) {
-        Some(Ok(n)) if n > 0 => {
-            let max = max_threads();
-            if n > max {
-                return Err(Error::param(
-                    "RAYON_NUM_THREADS",
-                    format!(
-                        "{n} is more than {MAX_THREADS_PER_CORE} per available core (at most {max})"
-                    ),
-                ));
-            }
-            Ok(n)
-        }
+        Some(Ok(n)) if n > 0 => within_max("RAYON_NUM_THREADS", n),
         _ => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
     }
 }
@@ -99,15 +100,7 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
     } else {
         threads
     };
-    let max = max_threads();
-    if threads > max {
-        return Err(Error::param(
-            "threads",
-            format!(
-                "{threads} is more than {MAX_THREADS_PER_CORE} per available core (at most {max})"
-            ),
-        ));
-    }
+    within_max("threads", threads)?;
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .thread_name(|i| format!("apm-trace-{i}"))

@@ -23,14 +23,7 @@ pub const MAX_DIMENSION: u32 = 16384;
 /// [`Error::InvalidParameter`] for a zero side, a side above [`MAX_DIMENSION`],
 /// or a pixel buffer larger than a quarter of the available memory.
 pub fn check_dimensions(width: u32, height: u32) -> Result<()> {
-    for (name, v) in [("width", width), ("height", height)] {
-        if v == 0 || v > MAX_DIMENSION {
-            return Err(Error::param(
-                name,
-                format!("must be in 1..={MAX_DIMENSION} pixels, got {v}"),
-            ));
-        }
-    }
+    check_sides(width, height)?;
     // The RGB buffer plus the EXR writer's copy.
     let bytes = width as u64 * height as u64 * 12 * 2;
     let allowed = available_memory() / 4;
@@ -42,6 +35,19 @@ pub fn check_dimensions(width: u32, height: u32) -> Result<()> {
                  available memory ({allowed} bytes)"
             ),
         ));
+    }
+    Ok(())
+}
+
+/// Each side in `1..=`[`MAX_DIMENSION`].
+fn check_sides(width: u32, height: u32) -> Result<()> {
+    for (name, v) in [("width", width), ("height", height)] {
+        if v == 0 || v > MAX_DIMENSION {
+            return Err(Error::param(
+                name,
+                format!("must be in 1..={MAX_DIMENSION} pixels, got {v}"),
+            ));
+        }
     }
     Ok(())
 }
@@ -165,41 +171,134 @@ impl Image {
         })
     }
 
-    /// Reads the first RGB(A) layer of an OpenEXR file (alpha dropped).
-    ///
-    /// The path must be a regular file (a FIFO would block,
-    /// [`crate::input`]), and the header is checked before any pixel is
-    /// allocated: a layer within [`check_dimensions`], and a file long
-    /// enough for the blocks of pixels it announces (a 1 KB header can claim
-    /// 30000 x 30000 pixels).
+    /// Reads the first RGB(A) layer of an OpenEXR file (alpha dropped),
+    /// header first ([`ExrFile`]).
     ///
     /// # Errors
-    /// [`Error::Io`] when the file is missing, not a regular file or not a
-    /// readable EXR image; [`Error::InvalidParameter`] for a size out of
-    /// range; [`Error::OutOfMemory`] when its pixels cannot be allocated.
+    /// As [`ExrFile::open`] and [`ExrFile::read_pixels`].
     pub fn read_exr(path: impl AsRef<Path>) -> Result<Self> {
-        use exr::prelude::{read, ReadChannels, ReadLayers};
-        let path = path.as_ref();
+        let file = ExrFile::open(path.as_ref())?;
+        let (width, height) = file.layer_size;
+        let pixels = file.read_pixels()?;
+        Ok(Image {
+            width: width as u32,
+            height: height as u32,
+            pixels,
+        })
+    }
+
+    /// Writes an 8-bit sRGB PNG after `tone` (temporary name, then rename).
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the folder is missing or the file cannot be written.
+    pub fn write_png(&self, path: impl AsRef<Path>, tone: ToneMap) -> Result<()> {
+        let data: Vec<u8> = self
+            .pixels
+            .iter()
+            .flat_map(|p| [tone.apply(p.x), tone.apply(p.y), tone.apply(p.z)])
+            .collect();
+        crate::output::write_with(path.as_ref(), |file| {
+            let mut enc = png::Encoder::new(file, self.width, self.height);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+            let mut w = enc.write_header().map_err(std::io::Error::other)?;
+            w.write_image_data(&data).map_err(std::io::Error::other)?;
+            w.finish().map_err(std::io::Error::other)
+        })
+    }
+}
+
+/// An OpenEXR file opened past its header: its sizes are known, its pixels
+/// not yet read, so a caller can check them (and allocate) first.
+///
+/// Only a regular file is opened (a FIFO would block, [`crate::input`]);
+/// the first layer's size is within [`check_dimensions`] and the file is
+/// long enough for the blocks of pixels its header announces: a 1 KB file
+/// may claim 30000 x 30000 pixels, which the decoder would allocate.
+#[cfg(feature = "image-io")]
+pub struct ExrFile {
+    reader: exr::block::reader::Reader<std::io::BufReader<std::fs::File>>,
+    path: std::path::PathBuf,
+    /// Layers in the file.
+    pub layers: usize,
+    /// The whole image's size (the display window), in pixels.
+    pub display: (usize, usize),
+    /// The first layer's position in the display window.
+    pub layer_position: (i32, i32),
+    /// The first layer's size, in pixels.
+    pub layer_size: (usize, usize),
+}
+
+#[cfg(feature = "image-io")]
+impl std::fmt::Debug for ExrFile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ExrFile")
+            .field("path", &self.path)
+            .field("layers", &self.layers)
+            .field("display", &self.display)
+            .field("layer_position", &self.layer_position)
+            .field("layer_size", &self.layer_size)
+            .finish_non_exhaustive()
+    }
+}
+
+#[cfg(feature = "image-io")]
+impl ExrFile {
+    /// Opens `path` and reads its header.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the file is missing, not a regular file, not an
+    /// EXR image, or shorter than its header announces;
+    /// [`Error::InvalidParameter`] for a layer size out of range.
+    pub fn open(path: &Path) -> Result<Self> {
         let (file, meta) = crate::input::open_regular_file(path)?;
         let reader = exr::block::read(std::io::BufReader::new(file), false)
             .map_err(|e| io_err(path, exr_io(e)))?;
-        let Some(h) = reader.headers().first() else {
+        let headers = reader.headers();
+        let Some(h) = headers.first() else {
             return Err(io_err(path, std::io::Error::other("no layer")));
         };
-        let (w, ht) = (h.layer_size.width(), h.layer_size.height());
-        check_dimensions(
-            u32::try_from(w).unwrap_or(u32::MAX),
-            u32::try_from(ht).unwrap_or(u32::MAX),
-        )?;
+        let side = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+        let (w, ht) = (side(h.layer_size.width()), side(h.layer_size.height()));
+        // The sides, then the file's length, then memory (which varies from
+        // run to run): a given file always meets the same first error.
+        check_sides(w, ht)?;
         // Every block of pixels has at least its 8-byte offset-table entry.
-        let blocks: u64 = reader.headers().iter().map(|h| h.chunk_count as u64).sum();
+        let blocks: u64 = headers.iter().map(|h| h.chunk_count as u64).sum();
         if blocks.saturating_mul(8) > meta.len() {
             return Err(io_err(
                 path,
-                std::io::Error::other("its header announces more pixels than the file holds"),
+                std::io::Error::other(format!(
+                    "its header announces {blocks} blocks of pixels, more than its {} bytes \
+                     can hold (truncated or corrupt)",
+                    meta.len()
+                )),
             ));
         }
-        let n = w * ht;
+        check_dimensions(w, ht)?;
+        let d = h.shared_attributes.display_window;
+        let pos = h.own_attributes.layer_position;
+        Ok(ExrFile {
+            layers: headers.len(),
+            display: (d.size.width(), d.size.height()),
+            layer_position: (pos.x(), pos.y()),
+            layer_size: (h.layer_size.width(), h.layer_size.height()),
+            path: path.to_path_buf(),
+            reader,
+        })
+    }
+
+    /// Decodes the first layer's RGB pixels (alpha dropped), row-major.
+    ///
+    /// # Errors
+    /// [`Error::Io`] for undecodable pixels or a first valid RGB(A) layer
+    /// that is not the first layer; [`Error::OutOfMemory`] when they
+    /// cannot be allocated.
+    pub fn read_pixels(self) -> Result<Vec<Vec3>> {
+        use exr::prelude::{read, ReadChannels, ReadLayers};
+        let path = self.path;
+        let n = self.layer_size.0 * self.layer_size.1;
         let mut buffer = Vec::new();
         buffer
             .try_reserve_exact(n)
@@ -225,41 +324,16 @@ impl Image {
             )
             .first_valid_layer()
             .all_attributes()
-            .from_chunks(reader)
-            .map_err(|e| io_err(path, exr_io(e)))?;
+            .from_chunks(self.reader)
+            .map_err(|e| io_err(&path, exr_io(e)))?;
         let size = img.layer_data.size;
         let (_, pixels) = img.layer_data.channel_data.pixels;
-        if pixels.len() != size.width() * size.height() {
+        if (size.width(), size.height()) != self.layer_size || pixels.len() != n {
             return Err(io_err(
-                path,
+                &path,
                 std::io::Error::other("its pixels do not match its header"),
             ));
         }
-        Ok(Image {
-            width: size.width() as u32,
-            height: size.height() as u32,
-            pixels,
-        })
-    }
-
-    /// Writes an 8-bit sRGB PNG after `tone` (temporary name, then rename).
-    ///
-    /// # Errors
-    /// [`Error::Io`] when the folder is missing or the file cannot be written.
-    pub fn write_png(&self, path: impl AsRef<Path>, tone: ToneMap) -> Result<()> {
-        let data: Vec<u8> = self
-            .pixels
-            .iter()
-            .flat_map(|p| [tone.apply(p.x), tone.apply(p.y), tone.apply(p.z)])
-            .collect();
-        crate::output::write_with(path.as_ref(), |file| {
-            let mut enc = png::Encoder::new(file, self.width, self.height);
-            enc.set_color(png::ColorType::Rgb);
-            enc.set_depth(png::BitDepth::Eight);
-            enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-            let mut w = enc.write_header().map_err(std::io::Error::other)?;
-            w.write_image_data(&data).map_err(std::io::Error::other)?;
-            w.finish().map_err(std::io::Error::other)
-        })
+        Ok(pixels)
     }
 }

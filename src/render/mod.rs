@@ -87,6 +87,8 @@ pub use cache::{CacheConfig, IrradianceCache};
 pub use camera::CameraRays;
 pub use direct::LightSampler;
 pub use estimate::{irradiance_default, irradiance_estimate, radiance_estimate, Estimate, Lookup};
+#[cfg(feature = "image-io")]
+pub use image::ExrFile;
 pub use image::{check_output_path, Image, ToneMap, MAX_DIMENSION};
 pub use metrics::{mean_bias, relative_rmse, relative_rmse_masked, rmse};
 pub use path::{Integrator, PathPart, PathTracer};
