@@ -51,14 +51,21 @@ fn kind_of(meta: &Metadata) -> &'static str {
     }
 }
 
+/// Whether `e`, from [`open_regular_file`] or [`read_regular_file`], says
+/// the path is not a regular file (rather than missing or unreadable).
+pub fn is_not_regular(e: &Error) -> bool {
+    matches!(e, Error::Io { source, .. } if source.kind() == std::io::ErrorKind::InvalidInput
+        && source.to_string().contains(NOT_REGULAR))
+}
+
+/// The words every not-a-regular-file error carries.
+const NOT_REGULAR: &str = "only regular files are read";
+
 fn require_regular(path: &Path, meta: &Metadata) -> Result<()> {
     if meta.file_type().is_file() {
         Ok(())
     } else {
-        Err(invalid(
-            path,
-            format!("{}: only regular files are read", kind_of(meta)),
-        ))
+        Err(invalid(path, format!("{}: {NOT_REGULAR}", kind_of(meta))))
     }
 }
 

@@ -114,6 +114,25 @@ fn dark_and_vanishing_lights() {
     s.validate().unwrap();
 }
 
+/// A camera at height `z` above the origin, looking down at the floor.
+fn look_down(s: &mut Scene, z: f32, vfov_deg: f32) {
+    s.set_camera(Camera {
+        eye: Vec3::new(0.0, 0.0, z),
+        forward: Vec3::NEG_Z,
+        up: Vec3::Y,
+        vfov_deg,
+    })
+    .unwrap();
+}
+
+/// A square render of direct light only.
+fn direct_only(side: u32, spp: u32) -> RenderConfig {
+    let mut cfg = RenderConfig::new(side, side);
+    cfg.spp = spp;
+    cfg.view = View::DirectOnly;
+    cfg
+}
+
 #[test]
 fn samples_beyond_f32_are_counted_not_silently_dropped() {
     // A light 1e-7 above a floor 1e-6 wide: I / r^2 is about 1e42, beyond
@@ -121,18 +140,9 @@ fn samples_beyond_f32_are_counted_not_silently_dropped() {
     // silence and the image read 0.
     let mut s = floor(1e-6);
     s.add_light(point(1e-7, 7e28)).unwrap();
-    s.set_camera(Camera {
-        eye: Vec3::new(0.0, 0.0, 1e-5),
-        forward: Vec3::NEG_Z,
-        up: Vec3::Y,
-        vfov_deg: 5.0,
-    })
-    .unwrap();
-    let device = Device::new().unwrap();
-    let rt = s.embree_geometry(&device).unwrap();
-    let mut cfg = RenderConfig::new(8, 8);
-    cfg.spp = 2;
-    cfg.view = View::DirectOnly;
+    look_down(&mut s, 1e-5, 5.0);
+    let rt = s.embree_geometry(&Device::new().unwrap()).unwrap();
+    let cfg = direct_only(8, 2);
     let (image, stats) = render_with(&s, &rt, None, None, &cfg, &|_, _| {}).unwrap();
     assert_eq!(stats.samples, 128);
     assert!(stats.dropped_samples > 0, "{stats:?}");
@@ -147,18 +157,9 @@ fn a_bright_but_representable_scene_drops_nothing() {
     // The Sun's power, 3.8e26 W, one unit above a floor: large, not overflowing.
     let mut s = floor(4.0);
     s.add_light(point(1.0, 3.8e26 / (4.0 * PI))).unwrap();
-    s.set_camera(Camera {
-        eye: Vec3::new(0.0, 0.0, 3.0),
-        forward: Vec3::NEG_Z,
-        up: Vec3::Y,
-        vfov_deg: 40.0,
-    })
-    .unwrap();
-    let device = Device::new().unwrap();
-    let rt = s.embree_geometry(&device).unwrap();
-    let mut cfg = RenderConfig::new(9, 9);
-    cfg.spp = 4;
-    cfg.view = View::DirectOnly;
+    look_down(&mut s, 3.0, 40.0);
+    let rt = s.embree_geometry(&Device::new().unwrap()).unwrap();
+    let cfg = direct_only(9, 4);
     let (image, stats) = render_with(&s, &rt, None, None, &cfg, &|_, _| {}).unwrap();
     assert_eq!(stats.dropped_samples, 0);
     // Lambert floor under an isotropic point light: at the centre, straight

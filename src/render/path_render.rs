@@ -85,7 +85,9 @@ pub fn render_path_with(
                         kept += 1;
                     }
                 }
-                (*px, row_dropped) = pixel_mean(sum, kept, cfg.spp, row_dropped);
+                let (mean, dropped_here) = pixel_mean(sum, kept, cfg.spp);
+                *px = mean;
+                row_dropped += dropped_here;
             }
             dropped.fetch_add(row_dropped, Ordering::Relaxed);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, rows);
@@ -130,6 +132,22 @@ impl PathHalves {
             b,
             dropped_samples: sa.dropped_samples + sb.dropped_samples,
         })
+    }
+
+    /// Refuses halves that left samples out: as a reference they would bias
+    /// every error measured against them.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidScene`] naming the count.
+    pub fn require_complete(&self) -> Result<()> {
+        if self.dropped_samples > 0 {
+            return Err(crate::Error::InvalidScene(format!(
+                "the path-traced reference left out {} NaN or infinite samples \
+                 (degenerate geometry, or radiance beyond f32)",
+                self.dropped_samples
+            )));
+        }
+        Ok(())
     }
 
     /// The mean of the halves.

@@ -165,7 +165,9 @@ pub fn render_with(
                         kept += 1;
                     }
                 }
-                (*px, row_dropped) = pixel_mean(sum, kept, cfg.spp, row_dropped);
+                let (mean, dropped_here) = pixel_mean(sum, kept, cfg.spp);
+                *px = mean;
+                row_dropped += dropped_here;
             }
             dropped.fetch_add(row_dropped, Ordering::Relaxed);
             lookup_ns.fetch_add(sc.lookup_ns, Ordering::Relaxed);
@@ -187,14 +189,13 @@ pub fn render_with(
 }
 
 /// A pixel from the f64 sum of its `kept` finite samples out of `spp`, and
-/// the dropped-sample count so far: summed in f32, samples near f32's range
-/// overflowed to infinite pixels. A mean beyond f32 drops every sample.
-pub(crate) fn pixel_mean(sum: DVec3, kept: u32, spp: u32, dropped: u64) -> (Vec3, u64) {
-    let dropped = dropped + u64::from(spp - kept);
+/// how many of its samples were dropped (summed in f32, samples near f32's
+/// range overflowed to infinite pixels). A mean beyond f32 drops them all.
+pub(crate) fn pixel_mean(sum: DVec3, kept: u32, spp: u32) -> (Vec3, u64) {
     let mean = (sum / f64::from(spp)).as_vec3();
     if mean.is_finite() {
-        (mean, dropped)
+        (mean, u64::from(spp - kept))
     } else {
-        (Vec3::ZERO, dropped + u64::from(kept))
+        (Vec3::ZERO, u64::from(spp))
     }
 }

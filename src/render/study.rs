@@ -122,19 +122,6 @@ fn check_reference_spp(reference_spp: u32, spp: u32) -> Result<()> {
     Ok(())
 }
 
-/// A reference that left samples out is biased where they fell, and every
-/// error measured against it with it.
-fn check_reference_drops(halves: &PathHalves) -> Result<()> {
-    if halves.dropped_samples > 0 {
-        return Err(Error::InvalidScene(format!(
-            "the path-traced reference left out {} NaN or infinite samples \
-             (degenerate geometry, or radiance beyond f32)",
-            halves.dropped_samples
-        )));
-    }
-    Ok(())
-}
-
 fn noise_free(e: f64, noise: f64) -> f64 {
     (e * e - noise * noise).max(0.0).sqrt()
 }
@@ -179,7 +166,7 @@ pub fn run_study(
         cfg.reference_spp,
         100.0 * reference_noise
     ));
-    check_reference_drops(&halves)?;
+    halves.require_complete()?;
 
     let mut pc = base.clone();
     pc.spp = cfg.path_spp;
@@ -362,7 +349,7 @@ pub fn run_direct_study(
     rc.spp = (cfg.reference_spp / 2).max(1);
     rc.seed = cfg.seed ^ 0xD1_2EC7;
     let halves = PathHalves::render(scene, rt, &rc, PathPart::Direct)?;
-    check_reference_drops(&halves)?;
+    halves.require_complete()?;
     let reference = halves.mean();
     let noise = halves.noise_rel(Some(&keep));
     let row = |renderer, light_samples, seconds: f64, img: &Image| -> Result<DirectRow> {

@@ -158,16 +158,14 @@ fn read_file(i: usize, uri: &str, want: u64, base: Option<&Path>) -> Result<Vec<
             "it resolves outside the scene file's folder",
         ));
     }
-    let regular = |m: &std::fs::Metadata| m.file_type().is_file();
-    // Checked before opening: opening a FIFO would block.
-    if !std::fs::metadata(&real).is_ok_and(|m| regular(&m)) {
-        return Err(refuse(i, uri, "not a regular file"));
-    }
-    let file = std::fs::File::open(&real).map_err(|_| not_found())?;
-    let meta = file.metadata().map_err(|_| not_found())?;
-    if !regular(&meta) {
-        return Err(refuse(i, uri, "not a regular file"));
-    }
+    // The error names the URI, never the resolved path.
+    let (file, meta) = crate::input::open_regular_file(&real).map_err(|e| {
+        if crate::input::is_not_regular(&e) {
+            refuse(i, uri, "not a regular file")
+        } else {
+            not_found()
+        }
+    })?;
     if meta.len() < want {
         return Err(refuse(
             i,

@@ -138,15 +138,9 @@ impl Reference {
         let rc = cfg.render_config(cfg.reference_spp, REFERENCE_SEED);
         let ind = PathHalves::render(scene, rt, &rc, PathPart::Indirect)?;
         let dir = PathHalves::render(scene, rt, &rc, PathPart::Direct)?;
-        // Every error of the study is measured against this image: one
-        // biased by left-out samples would skew them all.
-        let dropped = ind.dropped_samples + dir.dropped_samples;
-        if dropped > 0 {
-            return Err(crate::Error::InvalidScene(format!(
-                "the path-traced reference left out {dropped} NaN or infinite samples \
-                 (degenerate geometry, or radiance beyond f32)"
-            )));
-        }
+        // Every error of the study is measured against this image.
+        ind.require_complete()?;
+        dir.require_complete()?;
         let grid = quadrature_grid(scene);
         let direct_e: Vec<f64> = points
             .iter()
