@@ -153,6 +153,7 @@ pub mod emitter;
 pub mod engine;
 pub mod error;
 pub mod input;
+pub mod isa;
 // The paper's experiments drive the command line; they are not a stable API.
 #[cfg(feature = "experiments")]
 #[doc(hidden)]

@@ -126,6 +126,14 @@ pub trait RayCaster: Send + Sync {
         let _ = scene;
         Ok(())
     }
+
+    /// The x86 kernel set this caster's hits come from, when they depend on
+    /// one (Embree's do): photon files record it, and shards traced with
+    /// different sets are not merged. The default, `None`, says the hits do
+    /// not depend on the CPU.
+    fn isa(&self) -> Option<crate::isa::Isa> {
+        None
+    }
 }
 
 macro_rules! forward_caster {
@@ -147,6 +155,9 @@ macro_rules! forward_caster {
             }
             fn check_scene(&self, scene: &Scene) -> Result<()> {
                 (**self).check_scene(scene)
+            }
+            fn isa(&self) -> Option<crate::isa::Isa> {
+                (**self).isa()
             }
         }
     )*};

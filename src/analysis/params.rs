@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 ///
 /// Sample count and grid. Before stratification (one i.i.d. set, 8 seeds,
 /// theta_in = 30° for BRDFs; mean ± sd of `alpha_D` as N and the grid
-/// doubled; `report_convergence` in `tests/analysis_report.rs`):
+/// doubled; `report_convergence` in `tests/library/analysis_report.rs`):
 ///
 /// | function  | N=256, 16x16 | N=512, 16x32 | N=1024, 32x32 | N=2048, 32x64 |
 /// |-----------|--------------|--------------|---------------|---------------|
@@ -46,7 +46,7 @@ pub struct AnalysisParams {
     /// step up of alpha_D of about `(n + 1) / (samples ln(n + 1))` for
     /// `cos^n`; averaging K sets of N splits each step into K steps K times
     /// smaller at the clustering cost of K N^2 (against (K N)^2 for one set).
-    /// Measured (`tests/analysis_monotone.rs`): with 24 x 128 the largest
+    /// Measured (`tests/library/analysis_monotone.rs`): with 24 x 128 the largest
     /// step up is 1.7 % over cos^n, n = 0..1000, under 1 % over Phong
     /// exponents and Cook–Torrance roughness; with 16 x 128 it was 2.5 %,
     /// with one set of 512, 10 % (and 48 % for Phong).

@@ -1,9 +1,11 @@
 //! Arguments and helpers shared by the subcommands.
 
 use adaptive_pm::analysis::Estimator;
+use adaptive_pm::embree::Device;
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::engine::config::{DEFAULT_MAX_DEPTH, DEFAULT_SPLIT_CAP};
 use adaptive_pm::engine::{Budget, Mode, TraceConfig};
+use adaptive_pm::isa::Isa;
 use adaptive_pm::scene::Scene;
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -98,6 +100,26 @@ pub struct ThreadArgs {
 impl ThreadArgs {
     pub fn pool(&self) -> anyhow::Result<rayon::ThreadPool> {
         Ok(adaptive_pm::embree::thread_pool(self.threads)?)
+    }
+}
+
+/// Embree's kernel set.
+#[derive(clap::Args, Debug, Clone)]
+pub struct EmbreeArgs {
+    /// Pin Embree's x86 kernel set (sse2, sse4.2, avx, avx2, avx512): the
+    /// same settings then give the same photons on every host that runs it.
+    /// Default: the CPU's widest set, whose photons differ between CPUs.
+    #[arg(long = "embree-isa", env = adaptive_pm::isa::ISA_ENV, value_name = "SET")]
+    pub embree_isa: Option<Isa>,
+}
+
+impl EmbreeArgs {
+    /// The Embree device of these settings.
+    pub fn device(&self) -> anyhow::Result<Device> {
+        Ok(match self.embree_isa {
+            Some(isa) => Device::with_isa(isa)?,
+            None => Device::new()?,
+        })
     }
 }
 

@@ -1,8 +1,7 @@
 //! `adaptive-pm render <SCENE> --mode M (--quality Q | --n-max N) --out image.exr`:
 //! trace photons, build the maps, render an image (see `adaptive_pm::render`).
 
-use super::common::{open_scene, progress_bar, BudgetArgs, ThreadArgs};
-use adaptive_pm::embree::Device;
+use super::common::{open_scene, progress_bar, BudgetArgs, EmbreeArgs, ThreadArgs};
 use adaptive_pm::engine::{Mode, Tracer};
 use adaptive_pm::output::refuse_overwrite;
 use adaptive_pm::photon_file::read_render_maps;
@@ -31,6 +30,8 @@ pub struct RenderArgs {
     pub budget: BudgetArgs,
     #[command(flatten)]
     pub threads: ThreadArgs,
+    #[command(flatten)]
+    pub embree: EmbreeArgs,
     /// Samples per pixel.
     #[arg(long, default_value_t = 4)]
     pub spp: u32,
@@ -123,7 +124,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         refuse_overwrite(p, &inputs).context("--png")?;
     }
     let pool = args.threads.pool()?;
-    let device = Device::new()?;
+    let device = args.embree.device()?;
     let rt = scene.embree_geometry(&device)?;
     let bar = progress_bar(!args.json);
     if args.integrator == Integrator::Path {

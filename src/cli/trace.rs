@@ -1,8 +1,7 @@
 //! `adaptive-pm trace <SCENE> --mode M (--quality Q | --n-max N)`: one run of
 //! the engine, its counts, its maps' density statistics and timings.
 
-use super::common::{open_scene, progress_bar, BudgetArgs, ThreadArgs};
-use adaptive_pm::embree::Device;
+use super::common::{open_scene, progress_bar, BudgetArgs, EmbreeArgs, ThreadArgs};
 use adaptive_pm::engine::measure::{DENSITY_K, DENSITY_POINTS, DENSITY_POINTS_SEED};
 use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
 use adaptive_pm::photon_map::density_stats_where;
@@ -21,6 +20,8 @@ pub struct TraceArgs {
     #[command(flatten)]
     pub threads: ThreadArgs,
     #[command(flatten)]
+    pub embree: EmbreeArgs,
+    #[command(flatten)]
     pub shard: super::shard::ShardArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -35,7 +36,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     cfg.shard = args.shard.resolve()?;
     cfg.validate()?;
     let pool = args.threads.pool()?;
-    let device = Device::new()?;
+    let device = args.embree.device()?;
     let tracer = Tracer::new(scene.commit(&device)?);
     let scene = tracer.scene();
     let bar = progress_bar(!args.json);
@@ -108,6 +109,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         "stored_power": r.stored_power,
         "shard": cfg.shard.to_string(),
         "checksum": format!("{checksum:016x}"),
+        "embree_isa": r.embree_isa,
     });
     if args.json {
         println!("{value}");
@@ -166,7 +168,11 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             r.capped_hits
         );
     }
-    println!("checksum       {checksum:016x} (shard {})", cfg.shard);
+    let kernels = r.embree_isa.map_or("-", |i| i.name());
+    println!(
+        "checksum       {checksum:016x} (shard {}, Embree kernels {kernels})",
+        cfg.shard
+    );
     Ok(())
 }
 

@@ -30,6 +30,10 @@ impl RayCaster for CommittedScene {
         CommittedScene::occluded_batch(self, &rays[..n], &mut out[..n]);
     }
 
+    fn isa(&self) -> Option<crate::isa::Isa> {
+        CommittedScene::isa(self)
+    }
+
     /// One Embree geometry per mesh, in order, each with its mesh's material.
     fn check_scene(&self, scene: &Scene) -> Result<()> {
         if self.geometry_count() != scene.meshes.len() {

@@ -15,6 +15,7 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use embree_sys as sys;
 
+use crate::isa::Isa;
 use crate::{Error, Result};
 
 /// The first error Embree reported on a device since it was last checked.
@@ -68,6 +69,8 @@ pub(crate) struct DeviceInner {
     /// geometry upload, scene commit): Embree allows concurrent ray queries,
     /// not concurrent modification of one object.
     lock: Mutex<()>,
+    /// The kernel set Embree runs on this device (`None` off x86-64).
+    isa: Option<Isa>,
 }
 
 // SAFETY: the device handle is only used under `lock` (object creation,
@@ -78,7 +81,26 @@ unsafe impl Send for DeviceInner {}
 // `Mutex` in `errors`, or is a read of the immutable handle value.
 unsafe impl Sync for DeviceInner {}
 
+/// The kernel set a device made with `config` runs: its `isa=` item (which
+/// the CPU must run), the CPU's widest capped by its `max_isa=` item, or the
+/// CPU's widest. The last item of a kind wins, as in Embree's parser.
+fn kernel_set_of(config: &str) -> Result<Option<Isa>> {
+    let (mut pin, mut cap) = (None, None);
+    for item in config.split(',') {
+        match item.split_once('=').map(|(k, v)| (k.trim(), v)) {
+            Some(("isa", v)) => pin = Some(v.parse::<Isa>()?.require_supported()?),
+            Some(("max_isa", v)) => cap = Some(v.parse::<Isa>()?),
+            _ => {}
+        }
+    }
+    Ok(pin.or_else(|| Isa::native().map(|n| cap.map_or(n, |c| n.min(c)))))
+}
+
 impl DeviceInner {
+    pub(crate) fn isa(&self) -> Option<Isa> {
+        self.isa
+    }
+
     pub(crate) fn raw(&self) -> sys::RTCDevice {
         self.raw.as_ptr()
     }
@@ -133,28 +155,46 @@ impl std::fmt::Debug for Device {
         f.debug_struct("Device")
             .field("raw", &self.inner.raw)
             .field("version", &format_args!("{major}.{minor}.{patch}"))
+            .field("isa", &self.inner.isa)
             .finish()
     }
 }
 
 impl Device {
-    /// A device with Embree's default configuration (all cores for builds).
+    /// A device with Embree's default configuration (all cores for builds),
+    /// running the kernel set that [`ISA_ENV`](crate::isa::ISA_ENV) names,
+    /// or the widest one the CPU has when the variable is unset.
     ///
     /// # Errors
-    /// [`Error::Embree`] when Embree cannot create a device (unsupported CPU,
-    /// out of memory).
+    /// [`Error::InvalidParameter`] for a variable that names no kernel set or
+    /// one this CPU lacks; [`Error::Embree`] when Embree cannot create a
+    /// device (unsupported CPU, out of memory).
     pub fn new() -> Result<Device> {
-        Self::with_config("")
+        Isa::from_env()?.map_or_else(|| Self::with_config(""), Self::with_isa)
+    }
+
+    /// A device running Embree's `isa` kernel set, whatever the CPU's widest
+    /// and the environment say. Maps traced with the same pinned set are the
+    /// same on every x86-64 host that runs it (`docs/determinism.md`).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] when this CPU cannot run `isa`;
+    /// [`Error::Embree`] when Embree cannot create a device.
+    pub fn with_isa(isa: Isa) -> Result<Device> {
+        Self::with_config(&format!("isa={isa}"))
     }
 
     /// A device with an Embree configuration string, e.g. `"threads=2,verbose=1"`
-    /// (see `rtcNewDevice(3)`).
+    /// (see `rtcNewDevice(3)`). An `isa=` or `max_isa=` item must name a
+    /// kernel set ([`Isa`]) that this CPU runs: Embree itself would run SSE2
+    /// for an unknown name, and crash on a set the CPU lacks.
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] when `config` contains a NUL byte;
-    /// [`Error::Embree`] when Embree rejects the configuration or cannot
-    /// create a device.
+    /// [`Error::InvalidParameter`] when `config` contains a NUL byte or a bad
+    /// kernel set; [`Error::Embree`] when Embree rejects the configuration or
+    /// cannot create a device.
     pub fn with_config(config: &str) -> Result<Device> {
+        let isa = kernel_set_of(config)?;
         let c_config = CString::new(config)
             .map_err(|_| Error::param("config", format!("contains a NUL byte: {config:?}")))?;
         // SAFETY: `c_config` is NUL-terminated and lives across the call.
@@ -178,8 +218,15 @@ impl Device {
                 raw,
                 errors,
                 lock: Mutex::new(()),
+                isa,
             }),
         })
+    }
+
+    /// The kernel set Embree runs on this device: the pinned one, else the
+    /// CPU's widest (`None` off x86-64). Photon files record it.
+    pub fn isa(&self) -> Option<Isa> {
+        self.inner.isa
     }
 
     /// The version of the Embree library loaded at run time, `(major, minor, patch)`.

@@ -10,7 +10,7 @@
 //! - [`Ray`] / [`Hit`]: plain `Copy` data; the hit normal is Embree's
 //!   geometric normal normalised, *not* flipped toward the ray: it is
 //!   `normalize((v1 - v0) x (v2 - v0))`, counter-clockwise winding (checked
-//!   in `tests/embree_wrapper.rs`).
+//!   in `tests/library/embree_wrapper.rs`).
 //! - Batches: [`CommittedScene::intersect_batch`] uses
 //!   [`default_batch_kernel`] (packets of the CPU's vector width); every
 //!   kernel is measured in `benches/rays.rs`.

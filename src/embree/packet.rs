@@ -25,19 +25,27 @@ pub enum BatchKernel {
 }
 
 /// The kernel [`CommittedScene::intersect_batch`] and
-/// [`CommittedScene::occluded_batch`] use: packets of the CPU's native width,
-/// 16 with AVX-512 and 8 otherwise. Every kernel gives bit-identical results
-/// (`tests/embree_wrapper.rs`), so the choice changes speed only.
+/// [`CommittedScene::occluded_batch`] use on a device of the CPU's widest
+/// kernel set: packets of the CPU's native width, 16 with AVX-512 and 8
+/// otherwise (a pinned set picks its own width, [`BatchKernel::native_for`]). Every kernel gives bit-identical results
+/// (`tests/library/embree_wrapper.rs`), so the choice changes speed only.
 ///
 /// Measured: 16-wide packets were 1.1-1.25x faster than single-ray calls on
 /// an AVX-512 CPU (`benches/rays.rs`), and on AVX2 about 10 % slower than
 /// single calls or 8-wide packets (module docs).
 pub fn default_batch_kernel() -> BatchKernel {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        return BatchKernel::Packet16;
+    BatchKernel::native_for(crate::isa::Isa::native())
+}
+
+impl BatchKernel {
+    /// The packets native to Embree's kernel set `isa`: 16-wide for AVX-512,
+    /// 8-wide otherwise.
+    pub fn native_for(isa: Option<crate::isa::Isa>) -> BatchKernel {
+        match isa {
+            Some(crate::isa::Isa::Avx512) => BatchKernel::Packet16,
+            _ => BatchKernel::Packet8,
+        }
     }
-    BatchKernel::Packet8
 }
 
 /// Embree's validity mask (`-1` active, `0` inactive), 64-byte aligned as

@@ -23,7 +23,7 @@ use embree_sys as sys;
 use glam::Vec3;
 
 use super::device::{Device, DeviceInner};
-use super::packet::{default_batch_kernel, BatchKernel};
+use super::packet::BatchKernel;
 use super::{Hit, Ray};
 use crate::{Error, Result};
 
@@ -349,6 +349,17 @@ impl CommittedScene {
         self.device.check()
     }
 
+    /// The kernel set Embree runs for this scene (its device's).
+    pub fn isa(&self) -> Option<crate::isa::Isa> {
+        self.device.isa()
+    }
+
+    /// The batch kernel of this scene's kernel set: 16-wide packets with
+    /// AVX-512 and 8-wide otherwise (every kernel gives the same hits).
+    fn batch_kernel(&self) -> BatchKernel {
+        BatchKernel::native_for(self.isa())
+    }
+
     /// Converts Embree's answer for one ray.
     #[inline]
     fn hit_from(&self, ray: &sys::RTCRay, hit: &sys::RTCHit) -> Option<Hit> {
@@ -408,21 +419,22 @@ impl CommittedScene {
         r.tfar == f32::NEG_INFINITY
     }
 
-    /// [`intersect`](Self::intersect) for every ray, with
-    /// [`default_batch_kernel`]. Results are identical to `intersect`'s.
+    /// [`intersect`](Self::intersect) for every ray, in packets as wide as
+    /// the device's kernel set. Results are identical to `intersect`'s.
     ///
     /// # Panics
     /// If `rays` and `hits` differ in length.
     pub fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
-        self.intersect_batch_with(default_batch_kernel(), rays, hits);
+        self.intersect_batch_with(self.batch_kernel(), rays, hits);
     }
 
-    /// [`occluded`](Self::occluded) for every ray, with [`default_batch_kernel`].
+    /// [`occluded`](Self::occluded) for every ray, in packets as wide as the
+    /// device's kernel set.
     ///
     /// # Panics
     /// If `rays` and `out` differ in length.
     pub fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
-        self.occluded_batch_with(default_batch_kernel(), rays, out);
+        self.occluded_batch_with(self.batch_kernel(), rays, out);
     }
 
     /// [`intersect_batch`](Self::intersect_batch) with a chosen kernel.

@@ -65,10 +65,19 @@ pub struct TraceReport {
     pub trace_s: f64,
     /// Wall time of wave 0 (emission and first hits): the primary map's trace.
     pub trace_primary_s: f64,
+    /// Embree's kernel set that found the hits (`None` for a caster whose
+    /// hits do not depend on the CPU): the same settings give the same map
+    /// wherever this set runs.
+    pub embree_isa: Option<crate::isa::Isa>,
 }
 
 impl TraceReport {
-    pub(super) fn new(mode: Mode, n_max: u64, plans: &[LightPlan]) -> Self {
+    pub(super) fn new(
+        mode: Mode,
+        n_max: u64,
+        plans: &[LightPlan],
+        embree_isa: Option<crate::isa::Isa>,
+    ) -> Self {
         TraceReport {
             mode,
             n_max,
@@ -89,6 +98,7 @@ impl TraceReport {
             rays_per_s: 0.0,
             trace_s: 0.0,
             trace_primary_s: 0.0,
+            embree_isa,
         }
     }
 

@@ -60,6 +60,9 @@ pub struct CornellConfig {
     pub max_depth: u32,
     /// Density control's target in the density-mode runs.
     pub density_target: SweepDensityTarget,
+    /// Embree's kernel set, pinned so that the sweep's photons do not depend
+    /// on the CPU (`None`: [`Device::new`]'s choice).
+    pub embree_isa: Option<crate::isa::Isa>,
 }
 
 /// Where the density-mode runs of a sweep put their target density.
@@ -108,6 +111,7 @@ impl CornellConfig {
             estimator: Estimator::Paper,
             max_depth: crate::engine::config::DEFAULT_MAX_DEPTH,
             density_target: SweepDensityTarget::ReferenceMax,
+            embree_isa: None,
         }
     }
 
@@ -474,7 +478,7 @@ pub fn run_cornell(
         )));
     }
     let mesh_names: Vec<String> = scene.meshes().iter().map(|m| m.name.clone()).collect();
-    let device = Device::new()?;
+    let device = cfg.embree_isa.map_or_else(Device::new, Device::with_isa)?;
     let rt = scene.embree_geometry(&device)?;
     let points = scene
         .surface_sampler()

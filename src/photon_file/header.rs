@@ -37,6 +37,10 @@ pub struct Settings {
     pub split_cap: u32,
     /// Hash of the analysis constants ([`super::settings_hash`]).
     pub analysis_hash: u64,
+    /// Embree's kernel set that found the hits, as [`Isa::code`](crate::isa::Isa::code)
+    /// (0: not recorded, the caster's hits do not depend on the CPU). Shards
+    /// of different sets draw different photons, so they never merge.
+    pub embree_isa: u8,
 }
 
 /// Everything before the photons.
@@ -94,7 +98,7 @@ impl Header {
         for v in [VERSION, HEADER_SIZE as u32, self.flags] {
             b.extend_from_slice(&v.to_le_bytes());
         }
-        b.extend_from_slice(&[s.mode, s.estimator, 0, 0]);
+        b.extend_from_slice(&[s.mode, s.estimator, s.embree_isa, 0]);
         for v in [self.scene_hash, s.analysis_hash, s.seed, s.n_max] {
             b.extend_from_slice(&v.to_le_bytes());
         }
@@ -157,8 +161,8 @@ impl Header {
             )));
         }
         let flags = r.u32();
-        let (mode, estimator) = (r.u8(), r.u8());
-        r.u16();
+        let (mode, estimator, embree_isa) = (r.u8(), r.u8(), r.u8());
+        r.u8();
         let (scene_hash, analysis_hash, seed, n_max) = (r.u64(), r.u64(), r.u64(), r.u64());
         let (max_depth, split_cap, shard_index, shard_count) = (r.u32(), r.u32(), r.u32(), r.u32());
         let (photons, emitted, emitted_total) = (r.u64(), r.u64(), r.u64());
@@ -180,6 +184,7 @@ impl Header {
                 max_depth,
                 split_cap,
                 analysis_hash,
+                embree_isa,
             },
             shard_index,
             shard_count,
@@ -239,6 +244,9 @@ impl Header {
                 "unknown mode {} or estimator {}",
                 s.mode, s.estimator
             ));
+        }
+        if s.embree_isa != 0 && crate::isa::Isa::from_code(s.embree_isa).is_none() {
+            return Some(format!("unknown Embree kernel set code {}", s.embree_isa));
         }
         if s.max_depth > MAX_DEPTH_SETTING || s.split_cap == 0 {
             return Some(format!(
@@ -359,9 +367,6 @@ impl Cursor<'_> {
     fn u8(&mut self) -> u8 {
         self.take::<1>()[0]
     }
-    fn u16(&mut self) -> u16 {
-        u16::from_le_bytes(self.take())
-    }
     fn u32(&mut self) -> u32 {
         u32::from_le_bytes(self.take())
     }
@@ -393,6 +398,7 @@ mod tests {
                 max_depth: 15,
                 split_cap: 4096,
                 analysis_hash: 13,
+                embree_isa: 4,
             },
             shard_index: 2,
             shard_count: 7,
@@ -434,6 +440,7 @@ mod tests {
                 max_depth: 15,
                 split_cap: 4096,
                 analysis_hash: 2,
+                embree_isa: 0,
             },
             shard_index: 1,
             shard_count: 2,

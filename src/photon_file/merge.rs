@@ -78,6 +78,21 @@ fn check_shards(inputs: &[PathBuf]) -> Result<Vec<ShardFile<'_>>> {
         if h.scene_hash != h0.scene_hash {
             return Err(other("scenes"));
         }
+        if h.settings.embree_isa != h0.settings.embree_isa {
+            let name =
+                |code| crate::isa::Isa::from_code(code).map_or("an unrecorded set", |i| i.name());
+            return Err(refuse(format!(
+                "{} was traced with Embree's {} kernels and {} with {}: kernel sets \
+                 draw different photons from the same seed, so the merge would not be \
+                 the single run's map; pin one kernel set for every shard \
+                 (the {} variable, or the trace's kernel-set option)",
+                first.display(),
+                name(h0.settings.embree_isa),
+                s.path.display(),
+                name(h.settings.embree_isa),
+                crate::isa::ISA_ENV,
+            )));
+        }
         if h.settings != h0.settings {
             return Err(other(
                 "settings (mode, seed, N_MAX, depth, split cap or analysis)",

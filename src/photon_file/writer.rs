@@ -22,10 +22,12 @@ pub struct ShardInfo {
     pub emitted_total: u64,
     /// Whether the memory budget bound.
     pub budget_bound: bool,
+    /// Embree's kernel set that traced the shard ([`TraceReport::embree_isa`](crate::engine::TraceReport::embree_isa)).
+    pub embree_isa: Option<crate::isa::Isa>,
 }
 
 /// The header fields that come from the settings.
-pub(crate) fn settings_of(cfg: &TraceConfig) -> Settings {
+pub(crate) fn settings_of(cfg: &TraceConfig, embree_isa: Option<crate::isa::Isa>) -> Settings {
     Settings {
         mode: match cfg.mode {
             Mode::Classic => 0,
@@ -42,6 +44,7 @@ pub(crate) fn settings_of(cfg: &TraceConfig) -> Settings {
         max_depth: cfg.max_depth,
         split_cap: cfg.split_cap,
         analysis_hash: super::settings_hash(cfg),
+        embree_isa: embree_isa.map_or(0, crate::isa::Isa::code),
     }
 }
 
@@ -67,7 +70,7 @@ pub fn write_photons(
             0
         },
         scene_hash: info.scene_hash,
-        settings: settings_of(cfg),
+        settings: settings_of(cfg, info.embree_isa),
         shard_index: shard.index,
         shard_count: shard.count,
         merged_from: 0,

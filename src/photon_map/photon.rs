@@ -6,7 +6,7 @@
 //! | `power: u32` | 3 × 9 + 5 | RGB power, shared exponent, relative to the map's largest channel |
 //! | `dir: u32` | 2 × 12 + 6 + 2 | octahedral direction of travel, bounce depth, kd-tree split axis |
 //!
-//! Precision (all bounds are tested in `tests/kdtree.rs`):
+//! Precision (all bounds are tested in `tests/library/kdtree.rs`):
 //! - **Position**: one grid step `s = extent / (2^21 - 1)` on every axis, where `extent`
 //!   is the largest side of the map's bounding box; each coordinate is off by at most
 //!   `s / 2` (plus the f32 rounding of the decoded value): 2.4e-7 of the extent.

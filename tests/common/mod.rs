@@ -1,5 +1,5 @@
-//! Helpers shared by the hostile-input tests (each test file compiles its
-//! own copy and uses part of it).
+//! Helpers shared by the test binaries (each binary compiles its own copy
+//! and uses part of it).
 #![allow(dead_code)]
 
 /// An error's message followed by its sources', `: `-separated.

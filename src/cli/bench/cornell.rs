@@ -3,7 +3,7 @@
 //! (default: the paper's scene, the built-in empty box), written as CSV files,
 //! SVG/PNG figures and `claims.md`, with the paper's claims checked in a table.
 
-use crate::cli::common::{parse_estimator, ThreadArgs};
+use crate::cli::common::{parse_estimator, EmbreeArgs, ThreadArgs};
 use adaptive_pm::analysis::Estimator;
 use adaptive_pm::engine::config::DEFAULT_MAX_DEPTH;
 use adaptive_pm::engine::Mode;
@@ -46,6 +46,8 @@ pub struct CornellArgs {
     pub out: Option<PathBuf>,
     #[command(flatten)]
     pub threads: ThreadArgs,
+    #[command(flatten)]
+    pub embree: EmbreeArgs,
     /// Directionality estimator of the adaptive runs: paper or peak (both are reported).
     #[arg(long, default_value = "paper", value_parser = parse_estimator)]
     pub directionality: Estimator,
@@ -88,6 +90,7 @@ pub fn run(args: CornellArgs) -> anyhow::Result<()> {
         estimator: args.directionality,
         max_depth: args.max_depth,
         density_target: args.density_target,
+        embree_isa: args.embree.embree_isa,
     };
     cfg.validate()?;
     // A bad scene name fails here, before the output folder is made.

@@ -3,7 +3,8 @@
 //! ways in one run: raw embree-sys calls, the safe wrapper one ray at a time,
 //! and the wrapper in batches; on one thread and on all threads.
 
-use adaptive_pm::embree::{measure_throughput, Device, Throughput};
+use crate::cli::common::EmbreeArgs;
+use adaptive_pm::embree::{measure_throughput, Throughput};
 use adaptive_pm::scene::Scene;
 use serde_json::json;
 
@@ -22,6 +23,8 @@ pub struct RaysArgs {
     /// Seed of the rays.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    #[command(flatten)]
+    pub embree: EmbreeArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -45,7 +48,7 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
         );
     }
     let scene = Scene::open(&args.scene)?;
-    let device = Device::new()?;
+    let device = args.embree.device()?;
     let rt = scene.embree_geometry(&device)?;
     let eps = scene.ray_epsilon();
     let rays = scene
@@ -58,6 +61,7 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
         let mut v = row(&many);
         v["scene"] = json!(args.scene);
         v["rays"] = json!(rays.len());
+        v["embree_isa"] = json!(rt.isa());
         v["one_thread"] = row(&one);
         v["embree_version"] = json!(format!("{:?}", device.version()));
         println!("{v}");

@@ -3,8 +3,7 @@
 //! alone (see `adaptive_pm::render::study`). Times are from one run on one
 //! thread pool: only their ratios mean anything on a shared machine.
 
-use crate::cli::common::{open_scene, ThreadArgs};
-use adaptive_pm::embree::Device;
+use crate::cli::common::{open_scene, EmbreeArgs, ThreadArgs};
 use adaptive_pm::engine::Mode;
 use adaptive_pm::render::study::{run_direct_study, run_study, StudyConfig};
 use adaptive_pm::render::RenderConfig;
@@ -51,6 +50,8 @@ pub struct RenderBenchArgs {
     pub seed: u64,
     #[command(flatten)]
     pub threads: ThreadArgs,
+    #[command(flatten)]
+    pub embree: EmbreeArgs,
 }
 
 pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
@@ -60,7 +61,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
         args.target
     );
     let scene = open_scene(&args.scene, args.cosn)?;
-    let device = Device::new()?;
+    let device = args.embree.device()?;
     let rt = scene.embree_geometry(&device)?;
     let pool = args.threads.pool()?;
     let mut render = RenderConfig::new(args.size, args.size);

@@ -1,7 +1,7 @@
 //! `adaptive-pm bench tradeoff <SCENE>`: the speed/accuracy trade against a
 //! path-traced reference (see `adaptive_pm::experiments::tradeoff`).
 
-use super::super::common::{open_scene, ThreadArgs};
+use super::super::common::{open_scene, EmbreeArgs, ThreadArgs};
 use adaptive_pm::engine::{Budget, Mode};
 use adaptive_pm::experiments::tradeoff::knob::{choose_quality, Target};
 use adaptive_pm::experiments::tradeoff::output::{summary_text, to_json, write_outputs};
@@ -63,6 +63,8 @@ pub struct TradeoffArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub threads: ThreadArgs,
+    #[command(flatten)]
+    pub embree: EmbreeArgs,
     /// Print one JSON object on stdout (the summary goes to stderr).
     #[arg(long)]
     pub json: bool,
@@ -88,6 +90,7 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
         points: args.points,
         point_samples: args.point_samples,
         cache_dir: Some(args.out.join("cache")),
+        embree_isa: args.embree.embree_isa,
     };
     cfg.validate()?;
     std::fs::create_dir_all(args.out.join("cache"))
@@ -99,7 +102,7 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
         _ => None,
     };
     if let Some(target) = target {
-        let device = adaptive_pm::embree::Device::new()?;
+        let device = args.embree.device()?;
         let rt = scene.embree_geometry(&device)?;
         let rc = cfg.render_config(cfg.spp, 1);
         let c = pool.install(|| choose_quality(&scene, &rt, Mode::Adaptive, target, &rc))?;

@@ -93,6 +93,8 @@ pub struct TradeoffConfig {
     pub point_samples: u32,
     /// Where the reference is cached (`None`: not cached).
     pub cache_dir: Option<PathBuf>,
+    /// Embree's kernel set (`None`: [`Device::new`](crate::embree::Device::new)'s choice).
+    pub embree_isa: Option<crate::isa::Isa>,
 }
 
 impl Default for TradeoffConfig {
@@ -115,6 +117,7 @@ impl Default for TradeoffConfig {
             points: 128,
             point_samples: 4096,
             cache_dir: None,
+            embree_isa: None,
         }
     }
 }
@@ -240,7 +243,9 @@ pub fn run_tradeoff(
     cfg.validate()?;
     scene.validate()?;
     let start = std::time::Instant::now();
-    let device = crate::embree::Device::new()?;
+    let device = cfg
+        .embree_isa
+        .map_or_else(crate::embree::Device::new, crate::embree::Device::with_isa)?;
     let rt = scene.embree_geometry(&device)?;
     let total = cfg.modes.len() * cfg.budgets.len() * cfg.seeds as usize;
     let say = |done: usize, stage: String| progress(Progress { done, total, stage });

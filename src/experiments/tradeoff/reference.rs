@@ -115,8 +115,11 @@ impl Reference {
     /// # Errors
     /// Render errors, or an unreadable or unwritable cache file.
     pub fn get(scene: &Scene, rt: &CommittedScene, cfg: &TradeoffConfig) -> Result<Self> {
+        // The kernel set is in the key: another set's reference is as good
+        // a reference, but not the one a fresh run would make.
+        let isa = rt.isa().map_or("-", crate::isa::Isa::name);
         let settings = format!(
-            "v{REFERENCE_VERSION} {}x{} spp {} points {} x {}",
+            "v{REFERENCE_VERSION} {}x{} spp {} points {} x {} isa {isa}",
             cfg.width, cfg.height, cfg.reference_spp, cfg.points, cfg.point_samples
         );
         let key = format!("{:016x}", fnv(settings.as_bytes(), scene_hash(scene)));

@@ -17,7 +17,7 @@ use adaptive_pm::Error;
 use glam::Vec3;
 use std::f32::consts::PI;
 
-mod common;
+use crate::common;
 
 /// A white Lambert square of side `side` in the z = 0 plane, facing +z.
 fn floor(side: f32) -> Scene {

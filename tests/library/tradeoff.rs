@@ -9,7 +9,7 @@ use adaptive_pm::experiments::tradeoff::output::to_json;
 use adaptive_pm::experiments::tradeoff::{run_tradeoff, scene_hash, Reference, TradeoffConfig};
 use adaptive_pm::scene::Scene;
 
-const CORNELL_GLTF: &[u8] = include_bytes!("../assets/cornell_box.gltf");
+const CORNELL_GLTF: &[u8] = include_bytes!("../../assets/cornell_box.gltf");
 use adaptive_pm::Error;
 
 fn small(budgets: Vec<u64>, reference_spp: u32) -> TradeoffConfig {
@@ -26,6 +26,7 @@ fn small(budgets: Vec<u64>, reference_spp: u32) -> TradeoffConfig {
         points: 64,
         point_samples: 2048,
         cache_dir: None,
+        embree_isa: None,
     }
 }
 

@@ -8,7 +8,7 @@ use adaptive_pm::error::Error;
 use adaptive_pm::scene::Scene;
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 
 fn dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/hostile")

@@ -1,0 +1,33 @@
+//! The library's integration tests: physics oracles, determinism, hostile
+//! input. One binary of modules, so the suite compiles and links once; a
+//! module is a former test file. Run one with its path as the filter:
+//! `cargo test --test library render_cache::` (or one test:
+//! `cargo test --test library render_cache::cache_is_unbiased`).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod analysis_directionality;
+mod analysis_monotone;
+mod analysis_report;
+mod bench_cornell;
+mod big_run;
+mod brdf_models;
+mod cornell_empty;
+mod cornell_rays;
+mod embree_wrapper;
+mod engine;
+mod hostile;
+mod hostile_values;
+mod kdtree;
+mod kdtree_memory;
+mod path_tracer;
+mod photon_density;
+mod photon_grid;
+mod raycast;
+mod render;
+mod render_cache;
+mod scene_load;
+mod shards;
+mod sweep;
+mod tradeoff;
