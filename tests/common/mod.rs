@@ -38,3 +38,127 @@ pub fn claim_exr_size(bytes: &mut [u8], side: i32) {
     let at = bytes.windows(key.len()).position(|w| w == key).unwrap() + key.len() + 4;
     bytes[at..at + 4].copy_from_slice(&blocks.to_le_bytes());
 }
+
+/// The variable `scripts/seed-sweep.sh` sets: each seeded statistical test
+/// mixes it into its own seed ([`seed`]), so one sweep draws fresh photons
+/// and samples for every test.
+pub const SEED_ENV: &str = "ADAPTIVE_PM_TEST_SEED";
+
+/// The seed a statistical test uses: `base` when [`SEED_ENV`] is unset (the
+/// suite's fixed seeds), else a mix of `base` and the sweep's seed.
+///
+/// # Panics
+/// When the variable is set but is not an unsigned integer.
+pub fn seed(base: u64) -> u64 {
+    match std::env::var(SEED_ENV) {
+        Err(_) => base,
+        Ok(v) => {
+            let sweep: u64 = v
+                .trim()
+                .parse()
+                .unwrap_or_else(|_| panic!("{SEED_ENV}={v:?} is not an unsigned integer"));
+            // splitmix64 of the pair: distinct tests and sweeps never share a seed.
+            let mut z = base ^ sweep.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+    }
+}
+
+/// The least number of its own measured sigmas a statistical bound spans.
+pub const MIN_SIGMAS: f64 = 4.0;
+
+/// Asserts that `deviation`, the difference between an estimate and what
+/// it should be, lies within `bound`, and that `bound` is at least
+/// [`MIN_SIGMAS`] times `sigma`, the noise of the estimate that the test
+/// measured itself (a standard error from its own samples, independent
+/// halves or repeated runs). Prints one `seed-sweep:` line first, which
+/// `scripts/seed-sweep.sh` collects: the test, the check, the deviation in
+/// sigmas and the bound in sigmas.
+///
+/// # Panics
+/// When the deviation is outside the bound, when the bound is narrower than
+/// [`MIN_SIGMAS`] sigmas, or when sigma is not finite and positive.
+pub fn assert_within_noise(check: &str, deviation: f64, sigma: f64, bound: f64) {
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("unnamed")
+        .to_string();
+    let z = deviation.abs() / sigma;
+    let bound_sigmas = bound / sigma;
+    let ok = sigma.is_finite() && sigma > 0.0 && bound_sigmas >= MIN_SIGMAS && z <= bound_sigmas;
+    eprintln!(
+        "seed-sweep: test={test} check={} z={z:.3} bound_sigmas={bound_sigmas:.3} ok={ok}",
+        check.replace(' ', "_")
+    );
+    assert!(
+        sigma.is_finite() && sigma > 0.0,
+        "{check}: the measured noise sigma = {sigma} is not finite and positive"
+    );
+    assert!(
+        bound_sigmas >= MIN_SIGMAS,
+        "{check}: the bound {bound:.4e} is only {bound_sigmas:.2} sigma of the measured noise \
+         (sigma = {sigma:.4e}); a statistical bound spans at least {MIN_SIGMAS} sigma"
+    );
+    assert!(
+        z <= bound_sigmas,
+        "{check}: deviation {deviation:+.4e} is {z:.2} sigma (sigma = {sigma:.4e} measured \
+         here), outside the bound {bound:.4e} = {bound_sigmas:.2} sigma"
+    );
+}
+
+/// [`assert_within_noise`] with the bound at exactly `k` sigmas (`k` at least
+/// [`MIN_SIGMAS`]): for an estimate whose expected value is known exactly.
+pub fn assert_sigmas(check: &str, deviation: f64, sigma: f64, k: f64) {
+    assert_within_noise(check, deviation, sigma, k * sigma);
+}
+
+/// Mean and standard error of independent samples.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MeanVar {
+    n: u64,
+    mean: f64,
+    m2: f64,
+}
+
+impl MeanVar {
+    /// Adds one sample (Welford's update).
+    pub fn push(&mut self, x: f64) {
+        self.n += 1;
+        let d = x - self.mean;
+        self.mean += d / self.n as f64;
+        self.m2 += d * (x - self.mean);
+    }
+
+    /// The samples of an iterator.
+    pub fn of(xs: impl IntoIterator<Item = f64>) -> Self {
+        let mut m = MeanVar::default();
+        xs.into_iter().for_each(|x| m.push(x));
+        m
+    }
+
+    /// Number of samples.
+    pub fn count(&self) -> u64 {
+        self.n
+    }
+
+    /// The sample mean.
+    pub fn mean(&self) -> f64 {
+        self.mean
+    }
+
+    /// The unbiased sample variance.
+    pub fn variance(&self) -> f64 {
+        if self.n < 2 {
+            f64::NAN
+        } else {
+            self.m2 / (self.n - 1) as f64
+        }
+    }
+
+    /// The standard error of the mean.
+    pub fn std_error(&self) -> f64 {
+        (self.variance() / self.n as f64).sqrt()
+    }
+}
