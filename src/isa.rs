@@ -152,6 +152,120 @@ impl Isa {
     }
 }
 
+/// The variant of the C maths library's `sincosf`, `sin`, `cos`, `exp` and
+/// `pow` that glibc runs on this host: it picks one by CPU when a program
+/// starts (its FMA variant where the CPU has FMA and AVX2, the FMA4 one on
+/// FMA4 CPUs, else the SSE2 one), and the variants differ in the last bit
+/// for some inputs. The tracer's directions and the analysis go through
+/// them, so a map is reproduced only where the variant is the same too.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MathVariant {
+    /// glibc's SSE2 code.
+    Sse2,
+    /// glibc's FMA4 code (AMD Bulldozer to Excavator).
+    Fma4,
+    /// glibc's FMA code (every CPU with AVX2).
+    Fma,
+}
+
+impl MathVariant {
+    /// Every variant, in code order.
+    pub const ALL: [MathVariant; 3] = [MathVariant::Sse2, MathVariant::Fma4, MathVariant::Fma];
+
+    /// This host's variant, as glibc 2.36 selects it (`None` off x86-64).
+    pub fn host() -> Option<MathVariant> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            Some(if has!("fma") && has!("avx2") {
+                MathVariant::Fma
+            } else if is_fma4() {
+                MathVariant::Fma4
+            } else {
+                MathVariant::Sse2
+            })
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            None
+        }
+    }
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            MathVariant::Sse2 => "sse2",
+            MathVariant::Fma4 => "fma4",
+            MathVariant::Fma => "fma",
+        }
+    }
+
+    /// The code a photon file's header stores (0: not recorded).
+    pub fn code(self) -> u8 {
+        self as u8 + 1
+    }
+
+    /// The variant of a header code; `None` for 0 and unknown codes.
+    pub fn from_code(code: u8) -> Option<MathVariant> {
+        MathVariant::ALL
+            .get(usize::from(code).checked_sub(1)?)
+            .copied()
+    }
+}
+
+/// FMA4 (CPUID 0x80000001, ECX bit 16), which `is_x86_feature_detected!`
+/// does not name.
+#[cfg(target_arch = "x86_64")]
+fn is_fma4() -> bool {
+    use std::arch::x86_64::{__cpuid, __get_cpuid_max};
+    // The extended leaf is read only where the CPU reports it.
+    let (max_extended, _) = __get_cpuid_max(0x8000_0000);
+    max_extended >= 0x8000_0001 && __cpuid(0x8000_0001).ecx & (1 << 16) != 0
+}
+
+impl serde::Serialize for MathVariant {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+/// The compiled code that found a ray caster's hits, when that code
+/// depends on the CPU: Embree's version and the kernel set it ran.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Kernels {
+    /// The kernel set.
+    pub isa: Isa,
+    /// The library's `(major, minor, patch)`: Embree 3 and 4 build other BVHs.
+    pub version: (u32, u32, u32),
+}
+
+impl Kernels {
+    /// The version as one number, `major * 10000 + minor * 100 + patch`
+    /// (the header's form; 0 there means "not recorded").
+    pub fn version_code(&self) -> u32 {
+        let (a, b, c) = self.version;
+        a.saturating_mul(10_000)
+            .saturating_add(b.min(99) * 100)
+            .saturating_add(c.min(99))
+    }
+}
+
+impl serde::Serialize for Kernels {
+    /// `{"isa": "avx2", "embree": "3.13.5"}`.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut st = s.serialize_struct("Kernels", 2)?;
+        st.serialize_field("isa", &self.isa)?;
+        st.serialize_field("embree", &version_name(self.version_code()))?;
+        st.end()
+    }
+}
+
+/// A [`Kernels::version_code`] as `major.minor.patch`.
+pub fn version_name(code: u32) -> String {
+    format!("{}.{}.{}", code / 10_000, code / 100 % 100, code % 100)
+}
+
 impl fmt::Display for Isa {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
@@ -165,20 +279,21 @@ impl FromStr for Isa {
     /// `sse42` and `avx-512` are taken too.
     fn from_str(s: &str) -> Result<Isa> {
         let key = s.trim().to_ascii_lowercase();
-        let isa =
-            match key.as_str() {
-                "sse2" => Isa::Sse2,
-                "sse4.2" | "sse42" => Isa::Sse42,
-                "avx" => Isa::Avx,
-                "avx2" => Isa::Avx2,
-                "avx512" | "avx-512" => Isa::Avx512,
-                _ => return Err(Error::param(
+        let isa = match key.as_str() {
+            "sse2" => Isa::Sse2,
+            "sse4.2" | "sse42" => Isa::Sse42,
+            "avx" => Isa::Avx,
+            "avx2" => Isa::Avx2,
+            "avx512" | "avx-512" => Isa::Avx512,
+            _ => {
+                return Err(Error::param(
                     "embree isa",
                     format!(
                         "unknown kernel set {s:?}; expected one of sse2, sse4.2, avx, avx2, avx512"
                     ),
-                )),
-            };
+                ))
+            }
+        };
         Ok(isa)
     }
 }

@@ -127,11 +127,11 @@ pub trait RayCaster: Send + Sync {
         Ok(())
     }
 
-    /// The x86 kernel set this caster's hits come from, when they depend on
-    /// one (Embree's do): photon files record it, and shards traced with
-    /// different sets are not merged. The default, `None`, says the hits do
-    /// not depend on the CPU.
-    fn isa(&self) -> Option<crate::isa::Isa> {
+    /// The compiled kernels this caster's hits come from, when they depend
+    /// on the CPU (Embree's do): photon files record them, and shards traced
+    /// with different ones are not merged. The default, `None`, says the
+    /// hits do not depend on the CPU.
+    fn kernels(&self) -> Option<crate::isa::Kernels> {
         None
     }
 }
@@ -156,8 +156,8 @@ macro_rules! forward_caster {
             fn check_scene(&self, scene: &Scene) -> Result<()> {
                 (**self).check_scene(scene)
             }
-            fn isa(&self) -> Option<crate::isa::Isa> {
-                (**self).isa()
+            fn kernels(&self) -> Option<crate::isa::Kernels> {
+                (**self).kernels()
             }
         }
     )*};

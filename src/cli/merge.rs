@@ -45,6 +45,9 @@ pub fn run(args: MergeArgs) -> anyhow::Result<()> {
                 "budget_bound": budget_bound,
                 "merge_s": merge_s,
                 "checksum": format!("{:016x}", m.checksum),
+                "embree_isa": adaptive_pm::isa::Isa::from_code(h.settings.embree_isa),
+                "embree_version": adaptive_pm::isa::version_name(h.settings.embree_version),
+                "math_variant": adaptive_pm::isa::MathVariant::from_code(h.settings.math_variant),
                 "out": args.out,
             })
         );

@@ -126,7 +126,8 @@ pub fn checksum_and_write(
                 .fold(0u64, |a, p| a.saturating_add(cfg.shard.len_of(p.photons))),
             emitted_total: plans.iter().fold(0u64, |a, p| a.saturating_add(p.photons)),
             budget_bound: report.budget_bound,
-            embree_isa: report.embree_isa,
+            kernels: report.kernels,
+            math: report.math,
         };
         let header = write_photons(path, cfg, &info, map.compact_photons())?;
         debug_assert_eq!(header.map_checksum, checksum);

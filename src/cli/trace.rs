@@ -109,7 +109,9 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         "stored_power": r.stored_power,
         "shard": cfg.shard.to_string(),
         "checksum": format!("{checksum:016x}"),
-        "embree_isa": r.embree_isa,
+        "embree_isa": r.kernels.map(|k| k.isa),
+        "embree_version": r.kernels.map(|k| adaptive_pm::isa::version_name(k.version_code())),
+        "math_variant": r.math,
     });
     if args.json {
         println!("{value}");
@@ -168,7 +170,13 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
             r.capped_hits
         );
     }
-    let kernels = r.embree_isa.map_or("-", |i| i.name());
+    let kernels = r.kernels.map_or("-".into(), |k| {
+        format!(
+            "{} of Embree {}",
+            k.isa,
+            adaptive_pm::isa::version_name(k.version_code())
+        )
+    });
     println!(
         "checksum       {checksum:016x} (shard {}, Embree kernels {kernels})",
         cfg.shard

@@ -30,8 +30,8 @@ impl RayCaster for CommittedScene {
         CommittedScene::occluded_batch(self, &rays[..n], &mut out[..n]);
     }
 
-    fn isa(&self) -> Option<crate::isa::Isa> {
-        CommittedScene::isa(self)
+    fn kernels(&self) -> Option<crate::isa::Kernels> {
+        CommittedScene::kernels(self)
     }
 
     /// One Embree geometry per mesh, in order, each with its mesh's material.

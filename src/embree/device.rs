@@ -101,6 +101,20 @@ impl DeviceInner {
         self.isa
     }
 
+    pub(crate) fn version(&self) -> (u32, u32, u32) {
+        let get = |property| {
+            // SAFETY: the device is live and the VERSION_* properties exist in
+            // every Embree 3 and 4, so the call cannot raise an error.
+            let value = unsafe { sys::rtcGetDeviceProperty(self.raw(), property) };
+            u32::try_from(value).unwrap_or(0)
+        };
+        (
+            get(sys::RTC_DEVICE_PROPERTY_VERSION_MAJOR),
+            get(sys::RTC_DEVICE_PROPERTY_VERSION_MINOR),
+            get(sys::RTC_DEVICE_PROPERTY_VERSION_PATCH),
+        )
+    }
+
     pub(crate) fn raw(&self) -> sys::RTCDevice {
         self.raw.as_ptr()
     }
@@ -231,17 +245,7 @@ impl Device {
 
     /// The version of the Embree library loaded at run time, `(major, minor, patch)`.
     pub fn version(&self) -> (u32, u32, u32) {
-        let get = |property| {
-            // SAFETY: the device is live and the VERSION_* properties exist in
-            // every Embree 3 and 4, so the call cannot raise an error.
-            let value = unsafe { sys::rtcGetDeviceProperty(self.inner.raw(), property) };
-            u32::try_from(value).unwrap_or(0)
-        };
-        (
-            get(sys::RTC_DEVICE_PROPERTY_VERSION_MAJOR),
-            get(sys::RTC_DEVICE_PROPERTY_VERSION_MINOR),
-            get(sys::RTC_DEVICE_PROPERTY_VERSION_PATCH),
-        )
+        self.inner.version()
     }
 
     /// Queries a device property (`RTC_DEVICE_PROPERTY_*` in `embree_sys`).

@@ -354,6 +354,12 @@ impl CommittedScene {
         self.device.isa()
     }
 
+    /// Embree's version and kernel set, which the hits depend on.
+    pub fn kernels(&self) -> Option<crate::isa::Kernels> {
+        let version = self.device.version();
+        self.isa().map(|isa| crate::isa::Kernels { isa, version })
+    }
+
     /// The batch kernel of this scene's kernel set: 16-wide packets with
     /// AVX-512 and 8-wide otherwise (every kernel gives the same hits).
     fn batch_kernel(&self) -> BatchKernel {

@@ -65,10 +65,12 @@ pub struct TraceReport {
     pub trace_s: f64,
     /// Wall time of wave 0 (emission and first hits): the primary map's trace.
     pub trace_primary_s: f64,
-    /// Embree's kernel set that found the hits (`None` for a caster whose
-    /// hits do not depend on the CPU): the same settings give the same map
-    /// wherever this set runs.
-    pub embree_isa: Option<crate::isa::Isa>,
+    /// The kernels that found the hits (`None` for a caster whose hits do
+    /// not depend on the CPU): with the same settings, Embree version, kernel
+    /// set and [`math`](Self::math), the map is the same on any host.
+    pub kernels: Option<crate::isa::Kernels>,
+    /// The C maths library's variant on the tracing host.
+    pub math: Option<crate::isa::MathVariant>,
 }
 
 impl TraceReport {
@@ -76,7 +78,7 @@ impl TraceReport {
         mode: Mode,
         n_max: u64,
         plans: &[LightPlan],
-        embree_isa: Option<crate::isa::Isa>,
+        kernels: Option<crate::isa::Kernels>,
     ) -> Self {
         TraceReport {
             mode,
@@ -98,7 +100,8 @@ impl TraceReport {
             rays_per_s: 0.0,
             trace_s: 0.0,
             trace_primary_s: 0.0,
-            embree_isa,
+            kernels,
+            math: crate::isa::MathVariant::host(),
         }
     }
 

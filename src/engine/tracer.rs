@@ -258,8 +258,8 @@ impl<C: RayCaster> Tracer<C> {
             .map(|l| luminance(l.power()))
             .fold(0.0f32, f32::max);
 
-        let isa = self.prepared.caster().isa();
-        let mut report = TraceReport::new(cfg.mode(), n_max, &plans, isa);
+        let kernels = self.prepared.caster().kernels();
+        let mut report = TraceReport::new(cfg.mode(), n_max, &plans, kernels);
         let frame = map_frame(scene, &plans);
         let start = Instant::now();
         let mut density = match cfg.mode() {

@@ -41,6 +41,10 @@ pub struct Settings {
     /// (0: not recorded, the caster's hits do not depend on the CPU). Shards
     /// of different sets draw different photons, so they never merge.
     pub embree_isa: u8,
+    /// Embree's version, [`Kernels::version_code`](crate::isa::Kernels::version_code) (0: not recorded).
+    pub embree_version: u32,
+    /// The tracing host's maths variant, [`MathVariant::code`](crate::isa::MathVariant::code) (0: not recorded).
+    pub math_variant: u8,
 }
 
 /// Everything before the photons.
@@ -98,7 +102,7 @@ impl Header {
         for v in [VERSION, HEADER_SIZE as u32, self.flags] {
             b.extend_from_slice(&v.to_le_bytes());
         }
-        b.extend_from_slice(&[s.mode, s.estimator, s.embree_isa, 0]);
+        b.extend_from_slice(&[s.mode, s.estimator, s.embree_isa, s.math_variant]);
         for v in [self.scene_hash, s.analysis_hash, s.seed, s.n_max] {
             b.extend_from_slice(&v.to_le_bytes());
         }
@@ -133,6 +137,7 @@ impl Header {
         for v in self.depth_power.iter().flatten() {
             b.extend_from_slice(&v.to_le_bytes());
         }
+        b.extend_from_slice(&s.embree_version.to_le_bytes());
         b.resize(HEADER_SIZE, 0);
         b
     }
@@ -161,8 +166,7 @@ impl Header {
             )));
         }
         let flags = r.u32();
-        let (mode, estimator, embree_isa) = (r.u8(), r.u8(), r.u8());
-        r.u8();
+        let (mode, estimator, embree_isa, math_variant) = (r.u8(), r.u8(), r.u8(), r.u8());
         let (scene_hash, analysis_hash, seed, n_max) = (r.u64(), r.u64(), r.u64(), r.u64());
         let (max_depth, split_cap, shard_index, shard_count) = (r.u32(), r.u32(), r.u32(), r.u32());
         let (photons, emitted, emitted_total) = (r.u64(), r.u64(), r.u64());
@@ -173,6 +177,7 @@ impl Header {
         let (photon_sum, map_checksum, clamped, skipped) = (r.u64(), r.u64(), r.u64(), r.u64());
         let depth_photons = std::array::from_fn(|_| r.u64());
         let depth_power = std::array::from_fn(|_| [r.f64(), r.f64(), r.f64()]);
+        let embree_version = r.u32();
         Ok(Header {
             flags,
             scene_hash,
@@ -185,6 +190,8 @@ impl Header {
                 split_cap,
                 analysis_hash,
                 embree_isa,
+                embree_version,
+                math_variant,
             },
             shard_index,
             shard_count,
@@ -247,6 +254,9 @@ impl Header {
         }
         if s.embree_isa != 0 && crate::isa::Isa::from_code(s.embree_isa).is_none() {
             return Some(format!("unknown Embree kernel set code {}", s.embree_isa));
+        }
+        if s.math_variant != 0 && crate::isa::MathVariant::from_code(s.math_variant).is_none() {
+            return Some(format!("unknown maths variant code {}", s.math_variant));
         }
         if s.max_depth > MAX_DEPTH_SETTING || s.split_cap == 0 {
             return Some(format!(
@@ -399,6 +409,8 @@ mod tests {
                 split_cap: 4096,
                 analysis_hash: 13,
                 embree_isa: 4,
+                embree_version: 31305,
+                math_variant: 3,
             },
             shard_index: 2,
             shard_count: 7,
@@ -441,6 +453,8 @@ mod tests {
                 split_cap: 4096,
                 analysis_hash: 2,
                 embree_isa: 0,
+                embree_version: 0,
+                math_variant: 0,
             },
             shard_index: 1,
             shard_count: 2,

@@ -3,7 +3,7 @@
 //! (one chunk in memory at a time), checking every shard's checksum.
 
 use super::frame::{ByteHash, MapHash};
-use super::header::{Header, DEPTHS, FLAG_BUDGET_BOUND, FLAG_MERGED, TRAILER_MAGIC};
+use super::header::{Header, Settings, DEPTHS, FLAG_BUDGET_BOUND, FLAG_MERGED, TRAILER_MAGIC};
 use super::reader::PhotonReader;
 use crate::error::{Error, Result};
 use crate::output::AtomicOutput;
@@ -46,6 +46,43 @@ fn run_identity(h: &Header) -> (u64, [u32; 7], u64) {
     (h.scene_hash, frame, h.emitted_total)
 }
 
+/// How two shards' kernels differ, if they do (`docs/determinism.md`).
+fn kernel_mismatch(a: &Settings, b: &Settings) -> Option<String> {
+    use crate::isa::{version_name, Isa, MathVariant};
+    let or_unrecorded = |name: Option<&str>| name.unwrap_or("an unrecorded one").to_string();
+    if a.embree_isa != b.embree_isa {
+        let name = |c| or_unrecorded(Isa::from_code(c).map(Isa::name));
+        return Some(format!(
+            "Embree kernel set {} against {}",
+            name(a.embree_isa),
+            name(b.embree_isa)
+        ));
+    }
+    if a.embree_version != b.embree_version {
+        let name = |c| {
+            if c == 0 {
+                or_unrecorded(None)
+            } else {
+                version_name(c)
+            }
+        };
+        return Some(format!(
+            "Embree {} against {}",
+            name(a.embree_version),
+            name(b.embree_version)
+        ));
+    }
+    if a.math_variant != b.math_variant {
+        let name = |c| or_unrecorded(MathVariant::from_code(c).map(MathVariant::name));
+        return Some(format!(
+            "maths library variant {} against {}",
+            name(a.math_variant),
+            name(b.math_variant)
+        ));
+    }
+    None
+}
+
 /// Reads every shard's header (each file is closed again: a merge of many
 /// shards holds one open file at a time) and checks they form one whole run:
 /// the same scene, settings and frame, the shard count equal to the number of
@@ -78,18 +115,15 @@ fn check_shards(inputs: &[PathBuf]) -> Result<Vec<ShardFile<'_>>> {
         if h.scene_hash != h0.scene_hash {
             return Err(other("scenes"));
         }
-        if h.settings.embree_isa != h0.settings.embree_isa {
-            let name =
-                |code| crate::isa::Isa::from_code(code).map_or("an unrecorded set", |i| i.name());
+        if let Some(why) = kernel_mismatch(&h0.settings, &h.settings) {
             return Err(refuse(format!(
-                "{} was traced with Embree's {} kernels and {} with {}: kernel sets \
-                 draw different photons from the same seed, so the merge would not be \
-                 the single run's map; pin one kernel set for every shard \
-                 (the {} variable, or the trace's kernel-set option)",
+                "{} and {} were traced by different code: {why}; it draws different \
+                 photons from the same seed, so the merge would not be the single run's \
+                 map. Pin one Embree kernel set for every shard (the {} variable, or the \
+                 trace's kernel-set option) and trace them with one Embree on hosts of one \
+                 maths variant",
                 first.display(),
-                name(h0.settings.embree_isa),
                 s.path.display(),
-                name(h.settings.embree_isa),
                 crate::isa::ISA_ENV,
             )));
         }
@@ -276,4 +310,44 @@ pub fn merge(inputs: &[PathBuf], out: &Path) -> Result<MergeSummary> {
     // merged header combines those hashes: its checksum is the map's.
     let checksum = header.map_checksum;
     Ok(MergeSummary { header, checksum })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(isa: u8, version: u32, math: u8) -> Settings {
+        Settings {
+            mode: 2,
+            estimator: 0,
+            seed: 1,
+            n_max: 1000,
+            max_depth: 15,
+            split_cap: 4096,
+            analysis_hash: 2,
+            embree_isa: isa,
+            embree_version: version,
+            math_variant: math,
+        }
+    }
+
+    #[test]
+    fn shards_of_other_kernels_name_what_differs() {
+        let a = settings(4, 31305, 3);
+        assert_eq!(kernel_mismatch(&a, &a), None);
+        let why = |b| kernel_mismatch(&a, &b).unwrap();
+        assert_eq!(
+            why(settings(5, 31305, 3)),
+            "Embree kernel set avx2 against avx512"
+        );
+        assert_eq!(
+            why(settings(0, 31305, 3)),
+            "Embree kernel set avx2 against an unrecorded one"
+        );
+        assert_eq!(why(settings(4, 40303, 3)), "Embree 3.13.5 against 4.3.3");
+        assert_eq!(
+            why(settings(4, 31305, 1)),
+            "maths library variant fma against sse2"
+        );
+    }
 }

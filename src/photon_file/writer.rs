@@ -22,12 +22,14 @@ pub struct ShardInfo {
     pub emitted_total: u64,
     /// Whether the memory budget bound.
     pub budget_bound: bool,
-    /// Embree's kernel set that traced the shard ([`TraceReport::embree_isa`](crate::engine::TraceReport::embree_isa)).
-    pub embree_isa: Option<crate::isa::Isa>,
+    /// The kernels that traced the shard ([`TraceReport::kernels`](crate::engine::TraceReport::kernels)).
+    pub kernels: Option<crate::isa::Kernels>,
+    /// The tracing host's maths variant ([`TraceReport::math`](crate::engine::TraceReport::math)).
+    pub math: Option<crate::isa::MathVariant>,
 }
 
 /// The header fields that come from the settings.
-pub(crate) fn settings_of(cfg: &TraceConfig, embree_isa: Option<crate::isa::Isa>) -> Settings {
+pub(crate) fn settings_of(cfg: &TraceConfig, info: &ShardInfo) -> Settings {
     Settings {
         mode: match cfg.mode {
             Mode::Classic => 0,
@@ -44,7 +46,9 @@ pub(crate) fn settings_of(cfg: &TraceConfig, embree_isa: Option<crate::isa::Isa>
         max_depth: cfg.max_depth,
         split_cap: cfg.split_cap,
         analysis_hash: super::settings_hash(cfg),
-        embree_isa: embree_isa.map_or(0, crate::isa::Isa::code),
+        embree_isa: info.kernels.map_or(0, |k| k.isa.code()),
+        embree_version: info.kernels.map_or(0, |k| k.version_code()),
+        math_variant: info.math.map_or(0, crate::isa::MathVariant::code),
     }
 }
 
@@ -70,7 +74,7 @@ pub fn write_photons(
             0
         },
         scene_hash: info.scene_hash,
-        settings: settings_of(cfg, info.embree_isa),
+        settings: settings_of(cfg, info),
         shard_index: shard.index,
         shard_count: shard.count,
         merged_from: 0,

@@ -8,4 +8,5 @@ mod common;
 mod bench_cornell_cli;
 mod cli;
 mod hostile_cli;
+mod isa_cli;
 mod shards_cli;

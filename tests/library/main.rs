@@ -19,6 +19,7 @@ mod embree_wrapper;
 mod engine;
 mod hostile;
 mod hostile_values;
+mod isa_pinning;
 mod kdtree;
 mod kdtree_memory;
 mod path_tracer;

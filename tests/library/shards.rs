@@ -28,7 +28,8 @@ fn write(path: &Path, scene: &Scene, cfg: &TraceConfig, out: &TraceOutput) {
         emitted: out.plans.iter().map(|p| cfg.shard.len_of(p.photons)).sum(),
         emitted_total: out.plans.iter().map(|p| p.photons).sum(),
         budget_bound: out.report.budget_bound,
-        embree_isa: out.report.embree_isa,
+        kernels: out.report.kernels,
+        math: out.report.math,
     };
     write_photons(path, cfg, &info, &out.photons).unwrap();
 }

@@ -117,9 +117,12 @@ impl Reference {
     pub fn get(scene: &Scene, rt: &CommittedScene, cfg: &TradeoffConfig) -> Result<Self> {
         // The kernel set is in the key: another set's reference is as good
         // a reference, but not the one a fresh run would make.
-        let isa = rt.isa().map_or("-", crate::isa::Isa::name);
+        let isa = rt.kernels().map_or("-".into(), |k| {
+            format!("{} {}", k.isa, crate::isa::version_name(k.version_code()))
+        });
+        let math = crate::isa::MathVariant::host().map_or("-", |m| m.name());
         let settings = format!(
-            "v{REFERENCE_VERSION} {}x{} spp {} points {} x {} isa {isa}",
+            "v{REFERENCE_VERSION} {}x{} spp {} points {} x {} isa {isa} math {math}",
             cfg.width, cfg.height, cfg.reference_spp, cfg.points, cfg.point_samples
         );
         let key = format!("{:016x}", fnv(settings.as_bytes(), scene_hash(scene)));
