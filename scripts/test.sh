@@ -1,17 +1,26 @@
 #!/usr/bin/env bash
 # Sets up a fresh machine and runs the whole test suite:
 # 1. the unit, integration and doc tests (cargo test);
-# 2. the downstream renderer (a library user with default features off), the
+# 2. the determinism tests once per Embree kernel set the CPU runs, each
+#    pinned (scripts/ci-pinned-isa.sh), and a short seed sweep of the
+#    statistical tests (scripts/seed-sweep.sh; SEED_SWEEP_N seeds, default 4;
+#    the full sweep is `scripts/seed-sweep.sh 32`);
+# 3. the packaged crates built as a user gets them (cargo package), so that
+#    a file the code embeds cannot be left out of the package;
+# 4. the downstream renderer (a library user with default features off), the
 #    dependency count and the MSRV check (scripts/ci-downstream.sh);
-# 3. a sharded trace on a real single-node Slurm, merged and checked against a
+# 5. a sharded trace on a real single-node Slurm, merged and checked against a
 #    single run (scripts/ci-slurm.sh; needs root for its packages and daemons,
 #    so it is skipped with a note elsewhere);
-# 4. the scene-loading fuzzer for 60 s (scripts/ci-fuzz.sh; needs the nightly
+# 6. the scene-loading fuzzer for 60 s (scripts/ci-fuzz.sh; needs the nightly
 #    toolchain, skipped with a note where there is none).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
 cargo test --workspace --locked
+bash scripts/ci-pinned-isa.sh
+bash scripts/seed-sweep.sh "${SEED_SWEEP_N:-4}"
+cargo package --workspace --exclude adaptive-pm-downstream --locked --allow-dirty
 bash scripts/ci-downstream.sh
 if [ "$(id -u)" -eq 0 ]; then
     cargo build --release --locked
