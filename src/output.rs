@@ -69,8 +69,14 @@ pub fn check_target(path: &Path) -> Result<()> {
     }
 }
 
+/// The most bytes of the target's file name that a temporary name repeats:
+/// a legal name of 255 bytes, with the suffix, would pass the file
+/// system's limit ("File name too long" on a 254-byte `--out`).
+const TEMP_NAME_PREFIX_BYTES: usize = 64;
+
 /// Creates something new beside `path`, under the first free name of
-/// `.{file name}.{kind}-{pid}-{n}`: `create` must fail with `AlreadyExists`
+/// `.{file name}.{kind}-{pid}-{n}` (the file name cut to
+/// [`TEMP_NAME_PREFIX_BYTES`]): `create` must fail with `AlreadyExists`
 /// when the name is taken (`create_new`, `mkdir`), so nothing that exists,
 /// or a link planted at that name, is ever opened.
 fn create_beside<T>(
@@ -79,10 +85,15 @@ fn create_beside<T>(
     create: impl Fn(&Path) -> std::io::Result<T>,
 ) -> Result<(PathBuf, T)> {
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = path
+    let mut name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
+    let mut cut = name.len().min(TEMP_NAME_PREFIX_BYTES);
+    while !name.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    name.truncate(cut);
     let parent = parent_of(path);
     for _ in 0..64 {
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
@@ -306,5 +317,26 @@ pub fn refuse_overwrite(out: &Path, inputs: &[&Path]) -> Result<()> {
             ),
         )),
         None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    /// Every legal file name works, the longest (255 bytes) and multi-byte
+    /// ones included, and no temporary is left beside it.
+    #[test]
+    fn the_longest_legal_names_are_written() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["a".repeat(254), "b".repeat(255), "é".repeat(127)] {
+            let path = dir.path().join(&name);
+            let mut out = AtomicOutput::create(&path).unwrap();
+            out.file().write_all(b"x").unwrap();
+            out.finish().unwrap();
+            assert_eq!(std::fs::read(&path).unwrap(), b"x");
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 3);
     }
 }
