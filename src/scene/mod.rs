@@ -116,10 +116,11 @@ impl Mesh {
         (n != Vec3::ZERO).then_some(n)
     }
 
-    /// Total surface area.
-    pub fn area(&self) -> f32 {
+    /// Total surface area, summed in f64: an f32 sum of a million small
+    /// triangles lost half a percent.
+    pub fn area(&self) -> f64 {
         (0..self.indices.len())
-            .map(|i| triangle_area(self.triangle(i)))
+            .map(|i| f64::from(triangle_area(self.triangle(i))))
             .sum()
     }
 }
@@ -498,5 +499,40 @@ impl Scene {
     /// An area-uniform sampler over every triangle of the scene.
     pub fn surface_sampler(&self) -> SurfaceSampler {
         SurfaceSampler::new(self)
+    }
+}
+
+#[cfg(test)]
+mod area_tests {
+    use super::*;
+
+    /// A 10 x 10 floor of 2 x 1000 x 1000 triangles: 100 exactly (each
+    /// triangle's area, 5e-5, is nearly exact in f32); the f32 sum read 99.5.
+    #[test]
+    fn a_million_small_triangles_add_up_to_their_area() {
+        let n = 1000u32;
+        let h = 10.0 / n as f32;
+        let positions = (0..=n)
+            .flat_map(|i| (0..=n).map(move |j| Vec3::new(i as f32 * h, 0.0, j as f32 * h)))
+            .collect();
+        let at = |i: u32, j: u32| i * (n + 1) + j;
+        let indices = (0..n)
+            .flat_map(|i| {
+                (0..n).flat_map(move |j| {
+                    [
+                        [at(i, j), at(i, j + 1), at(i + 1, j)],
+                        [at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)],
+                    ]
+                })
+            })
+            .collect();
+        let mesh = Mesh {
+            name: "floor".into(),
+            positions,
+            indices,
+            material: 0,
+            normals: Vec::new(),
+        };
+        assert!((mesh.area() - 100.0).abs() < 1e-3, "{}", mesh.area());
     }
 }
