@@ -11,8 +11,10 @@
 //!   geometric normal normalised, *not* flipped toward the ray: it is
 //!   `normalize((v1 - v0) x (v2 - v0))`, counter-clockwise winding (checked
 //!   in `tests/library/embree_wrapper.rs`).
-//! - Batches: [`CommittedScene::intersect_batch`] uses
-//!   [`default_batch_kernel`] (packets of the CPU's vector width); every
+//! - [`Device::with_isa`]: Embree's kernel set pinned, so that the hits, and
+//!   so the photons, do not depend on the CPU ([`crate::isa`]).
+//! - Batches: [`CommittedScene::intersect_batch`] uses packets as wide as
+//!   the device's kernel set ([`BatchKernel::native_for`]); every
 //!   kernel is measured in `benches/rays.rs`.
 //! - [`set_flush_denormals`] / [`thread_pool`]: Embree's traversal expects
 //!   flush-to-zero and denormals-are-zero on every tracing thread.
