@@ -1,5 +1,5 @@
 //! Step 3: greedy agglomerative clustering with complete linkage (paper
-//! §2.1.3, SPEC §2.3).
+//! §2.1.3; docs/method.md, "Step 3: clustering").
 //!
 //! Only one group grows at a time: every other group is still a single
 //! sample. So the complete-linkage distance of the growing group G to a
@@ -12,7 +12,8 @@
 //! are compared through dot products (acos is monotone).
 //!
 //! Samples at or below the diffuse level `1 / (2 pi)` never seed nor join a
-//! group (SPEC: otherwise the last peak swallows the low tail).
+//! group (otherwise the last peak swallows the low tail: docs/method.md,
+//! "Step 3: clustering").
 
 use glam::Vec3;
 

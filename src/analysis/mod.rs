@@ -1,6 +1,6 @@
-//! Directionality analysis of emission profiles and BRDFs (paper §2.1,
-//! SPEC §2.3): `alpha_D` in [`alpha_min`, 1], 1 for a diffuse function,
-//! towards 0 for a single sharp direction.
+//! Directionality analysis of emission profiles and BRDFs (paper §2.1;
+//! docs/method.md, "Directionality analysis"): `alpha_D` in [`alpha_min`, 1],
+//! 1 for a diffuse function, towards 0 for a single sharp direction.
 //!
 //! The analysed function is the emitter's radiance `cos^n` or a BRDF's
 //! `f_r(wi, .)` (luminance of RGB; `f`, not `f cos`), normalised to unit
@@ -233,7 +233,7 @@ pub fn analyze_emitter(e: &CosN, est: Estimator, p: &AnalysisParams) -> Result<D
 }
 
 /// Variance of normalised `cos^n` over the hemisphere,
-/// `n^2 / (4 pi^2 (2n + 1))` (SPEC §2.3).
+/// `n^2 / (4 pi^2 (2n + 1))` (docs/method.md, "The analysed function").
 pub fn variance_cosn(n: f32) -> f32 {
     let n = n as f64;
     (n * n / (4.0 * std::f64::consts::PI.powi(2) * (2.0 * n + 1.0))) as f32

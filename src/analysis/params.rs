@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 
-/// Every constant of the analysis (SPEC §2.3).
+/// Every constant of the analysis (docs/method.md, "Directionality analysis").
 ///
 /// Sample count and grid. Before stratification (one i.i.d. set, 8 seeds,
 /// theta_in = 30° for BRDFs; mean ± sd of `alpha_D` as N and the grid

@@ -1,5 +1,6 @@
 //! Step 4: the solid angle of a peak from the extreme spherical coordinates
-//! of its samples (paper §2.1.4, SPEC §2.3):
+//! of its samples (paper §2.1.4; docs/method.md, "Step 4: solid angles of the
+//! peaks"):
 //! `omega = arc(phi) * (cos theta_min - cos theta_max)`.
 //!
 //! `arc(phi)` is the shortest arc covering the azimuths, `2 pi` minus their

@@ -19,7 +19,8 @@ pub const DEFAULT_SPLIT_CAP: u32 = 4096;
 /// (RenderPark's value).
 pub const DENSITY_CONTROL_K: usize = 20;
 
-/// The three ways of tracing compared in every experiment (SPEC §2.5).
+/// The three ways of tracing compared in every experiment (docs/method.md,
+/// "The three modes").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Mode {

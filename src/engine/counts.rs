@@ -1,4 +1,5 @@
-//! How many photons: per light at emission, per hit when splitting (SPEC §2.2, §2.4).
+//! How many photons: per light at emission, per hit when splitting
+//! (docs/method.md, "The three factors" and "Photon counts").
 //!
 //! - classic and density control: `N_l = N_MAX * P_l / sum P` (luminance of RGB power).
 //! - adaptive: `N_l = alpha_E * alpha_A * alpha_D * N_MAX` with `alpha_E = P_l / max P`,

@@ -1,6 +1,7 @@
-//! The photon maps of a run and their quality (SPEC §3): the full map and the
-//! map of primary photons (stored at their first hit), each a balanced kd-tree,
-//! and the photon density `k / (pi r_k^2)` over fixed surface points.
+//! The photon maps of a run and their quality (docs/method.md, "The photon map
+//! and its measurements"): the full map and the map of primary photons
+//! (stored at their first hit), each a balanced kd-tree, and the photon
+//! density `k / (pi r_k^2)` over fixed surface points.
 
 use crate::photon_map::{
     density_stats, CompactPhoton, DensityStats, PhotonMap, PhotonRecord, Quantizer,
@@ -13,7 +14,8 @@ use std::time::Instant;
 pub const DENSITY_K: usize = 50;
 
 /// Evaluation points of the density statistics: enough that the max is
-/// stable (SPEC: the same points for every mode and run).
+/// stable (the same points for every mode and run: docs/method.md, "Density
+/// measurements").
 pub const DENSITY_POINTS: usize = 4096;
 
 /// Seed of the evaluation points (fixed, independent of the run's seed).

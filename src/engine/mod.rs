@@ -1,4 +1,5 @@
-//! The photon engine: wavefront tracing in three modes (SPEC §2.4–2.5).
+//! The photon engine: wavefront tracing in three modes (docs/method.md,
+//! "Photon counts", "Caps and global budget" and "The three modes").
 //!
 //! ```no_run
 //! use adaptive_pm::embree::Device;

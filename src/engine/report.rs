@@ -1,5 +1,6 @@
-//! What a run counted (SPEC §3): photons emitted, stored, re-emitted, split
-//! rates per depth, whether a bound was hit, and how long it took.
+//! What a run counted (docs/method.md, "What a run reports"): photons
+//! emitted, stored, re-emitted, split rates per depth, whether a bound was
+//! hit, and how long it took.
 
 use super::config::Mode;
 use super::counts::LightPlan;

@@ -1,4 +1,5 @@
-//! Which emitted photons a run traces: shard `index` of `count` (SPEC §5, scale).
+//! Which emitted photons a run traces: shard `index` of `count`
+//! (docs/method.md, "Shards").
 //!
 //! Photon `i` of light `l` is keyed by `(seed, l, i)` and its whole path (every
 //! child and bounce) by that key, so a shard that emits a subset of the ids

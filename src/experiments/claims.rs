@@ -1,5 +1,6 @@
-//! The paper's claims (SPEC §4) checked against a sweep: each claim, what the
-//! sweep measured, and a verdict computed from the numbers.
+//! The paper's claims (docs/method.md, "The claims and their verdicts")
+//! checked against a sweep: each claim, what the sweep measured, and a
+//! verdict computed from the numbers.
 //!
 //! Tolerances, each from the noise it must absorb:
 //! - [`DENSITY_FACTOR`] = 1.5 for "close to" on max densities: one `k = 50`
@@ -438,7 +439,7 @@ fn alpha(r: &CornellResults, out: &mut Vec<Claim>) {
         let (lo, hi) = min_max(&v);
         out.push(Claim {
             figure: "alpha",
-            paper: "(SPEC) alpha_D(n)(n+2)/2 = 1 keeps the peak density of a diffuse light",
+            paper: "(not in the paper) alpha_D(n)(n+2)/2 = 1 keeps the peak density of a diffuse light",
             measured: format!(
                 "{name} estimator: median {:.2}, range {lo:.2}..{hi:.2}",
                 median(v.clone())
@@ -448,7 +449,8 @@ fn alpha(r: &CornellResults, out: &mut Vec<Claim>) {
     }
 }
 
-/// Every claim of SPEC §4, checked against `r`.
+/// Every claim of docs/method.md, "The claims and their verdicts", checked
+/// against `r`.
 pub fn check_claims(r: &CornellResults) -> Vec<Claim> {
     let mut out = Vec::new();
     fig7a(r, &mut out);

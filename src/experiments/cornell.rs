@@ -1,13 +1,15 @@
-//! The paper's experiments (SPEC §4): a Cornell box (by default the built-in
-//! `cornell-empty`, the paper's scene: walls and light, no blocks; or
-//! `cornell`, or any glTF with one area light), its light's `cos^n` exponent
-//! swept, every mode traced at each `n` with the same `N_MAX`.
+//! The paper's experiments (docs/method.md, "The experiments"): a Cornell
+//! box (by default the built-in `cornell-empty`, the paper's scene: walls and
+//! light, no blocks; or `cornell`, or any glTF with one area light), its
+//! light's `cos^n` exponent swept, every mode traced at each `n` with the
+//! same `N_MAX`.
 //!
 //! - **Reference**: the classic mode with a diffuse light (n = 0), traced first.
 //!   Its primary map's max density is Fig. 7a's reference line, its full map's
 //!   sigma Fig. 9a's, and its primary map's max density is the
-//!   density-control target of every density-mode run (SPEC §2.5; `mean`, its
-//!   full map's mean density, is the other choice). When the sweep itself has the classic run at n = 0,
+//!   density-control target of every density-mode run (docs/method.md,
+//!   "Density control"; `mean`, its full map's mean density, is the other
+//!   choice). When the sweep itself has the classic run at n = 0,
 //!   that run *is* the reference (same seed, same photons) and is not traced twice.
 //! - **One trace per run** gives both maps: records carry their depth, and
 //!   [`Maps::build`] builds the primary-only and the full kd-tree.
@@ -72,8 +74,8 @@ pub enum SweepDensityTarget {
     /// every map near the mean, far below the reference's max.
     ReferenceMean,
     /// The reference's primary-map *max* density (Fig. 7a's reference line;
-    /// the default, SPEC §2.5: density control then limits the map to the
-    /// reference, the paper's reading).
+    /// the default, docs/method.md, "Density control": density control then
+    /// limits the map to the reference, the paper's reading).
     ReferenceMax,
     /// A given density, photons per unit area (> 0).
     PerArea(f64),
@@ -150,8 +152,9 @@ impl CornellConfig {
     }
 }
 
-/// Every metric of one run (SPEC §3). Densities are photons per unit area of
-/// the scene (the built-in box is in millimetres: photons / mm^2).
+/// Every metric of one run (docs/method.md, "The photon map and its
+/// measurements"). Densities are photons per unit area of the scene (the
+/// built-in box is in millimetres: photons / mm^2).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct RunMetrics {
     /// The light's exponent.

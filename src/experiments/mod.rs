@@ -1,5 +1,5 @@
-//! The paper's experiments reproduced (SPEC §4): the Cornell sweep
-//! ([`cornell::run_cornell`]), its output files and figures
+//! The paper's experiments reproduced (docs/method.md, "The experiments"):
+//! the Cornell sweep ([`cornell::run_cornell`]), its output files and figures
 //! ([`output::write_outputs`]) and the paper's claims checked against it
 //! ([`claims::check_claims`]).
 //!

@@ -185,7 +185,7 @@ pub fn fig9b_indices(count: usize) -> Vec<usize> {
 }
 
 const README: &str = "\
-Cornell box sweep of `adaptive-pm bench cornell` (SPEC section 4).
+Cornell box sweep of `adaptive-pm bench cornell` (docs/method.md, The experiments).
 x = n, the exponent of the light's cos^n radiance. Densities: photons per mm^2
 (k = 50 nearest photons, 4096 fixed area-uniform points). Times: seconds.
 The reference is the classic mode with a diffuse light (n = 0).

@@ -1,8 +1,9 @@
-//! Photon density statistics (SPEC §3): the density at a surface point is
-//! `k / (pi r_k^2)` photons per unit area, with `r_k` the distance to the k-th
-//! nearest photon; over a fixed set of evaluation points (area-uniform on the
-//! scene's surfaces, the same for every mode) the experiments report its maximum,
-//! mean, standard deviation and standard deviation over mean.
+//! Photon density statistics (docs/method.md, "Density measurements"): the
+//! density at a surface point is `k / (pi r_k^2)` photons per unit area, with
+//! `r_k` the distance to the k-th nearest photon; over a fixed set of
+//! evaluation points (area-uniform on the scene's surfaces, the same for every
+//! mode) the experiments report its maximum, mean, standard deviation and
+//! standard deviation over mean.
 //!
 //! Choices:
 //! - `k` defaults to [`DEFAULT_DENSITY_K`] = 50: the estimate's relative standard

@@ -1,5 +1,6 @@
-//! The photon map (SPEC §3): photons stored at non-specular hits, kept compact
-//! (16 bytes each, [`photon`]) in a balanced kd-tree in one flat array
+//! The photon map (docs/method.md, "The photon map and its measurements"):
+//! photons stored at non-specular hits, kept compact (16 bytes each,
+//! [`photon`]) in a balanced kd-tree in one flat array
 //! ([`PhotonMap`], built in [`kdtree`], queried in [`query`]), a hash grid that can be
 //! queried while it grows for density control ([`GrowingMap`], Suykens & Willems 2000)
 //! and the photon-density statistics the experiments report ([`density`]).

@@ -1,5 +1,6 @@
 //! Area-uniform points on a scene's surfaces: the fixed evaluation points of the
-//! density statistics (SPEC §3) and the ray origins of `bench rays`.
+//! density statistics (docs/method.md, "Density measurements") and the ray
+//! origins of `bench rays`.
 
 use super::{triangle_area, Scene};
 use crate::rng::{hash2, Rng};

@@ -1,7 +1,8 @@
 //! `adaptive-pm bench cornell [--scene cornell-empty] [--n-sweep 1..200]
-//! [--n-max 100000] ...`: the paper's experiments (SPEC §4) on a Cornell box
-//! (default: the paper's scene, the built-in empty box), written as CSV files,
-//! SVG/PNG figures and `claims.md`, with the paper's claims checked in a table.
+//! [--n-max 100000] ...`: the paper's experiments (docs/method.md, "The
+//! experiments") on a Cornell box (default: the paper's scene, the built-in
+//! empty box), written as CSV files, SVG/PNG figures and `claims.md`, with
+//! the paper's claims checked in a table.
 
 use crate::cli::common::{parse_estimator, EmbreeArgs, ThreadArgs};
 use adaptive_pm::analysis::Estimator;
@@ -41,7 +42,7 @@ pub struct CornellArgs {
     /// Seed of every run.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Output folder (default bench-out/cornell-<unix time>).
+    /// Output folder (default `bench-out/cornell-<unix time>`).
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
@@ -55,8 +56,8 @@ pub struct CornellArgs {
     #[arg(long, default_value_t = DEFAULT_MAX_DEPTH)]
     pub max_depth: u32,
     /// Density control's target: `max` (the reference's primary-map max
-    /// density: the paper's reading, SPEC §2.5), `mean` (its full-map mean
-    /// density) or photons per unit area.
+    /// density: the paper's reading, docs/method.md, "Density control"),
+    /// `mean` (its full-map mean density) or photons per unit area.
     #[arg(long, default_value = "max")]
     pub density_target: SweepDensityTarget,
     /// Print one JSON object instead of text.

@@ -1,6 +1,6 @@
-//! The speed/accuracy trade (SPEC §5, issue 10): error against an unbiased
-//! reference, against time and memory, for the three modes over a range of
-//! budgets and several seeds.
+//! The speed/accuracy trade (docs/method.md, "The speed-accuracy trade";
+//! issue 10): error against an unbiased reference, against time and memory,
+//! for the three modes over a range of budgets and several seeds.
 //!
 //! # The reference
 //! The path tracer ([`crate::render::path`]), never one of the competitors,
