@@ -55,8 +55,8 @@ def main() -> int:
     ]
     for t in sorted(checks):
         rows.append(
-            f"| `{t}` | {len(checks[t])} | {fails[t]}/{runs[t]} | {worst_z[t]:.2} | "
-            f"{bound[t]:.2} | {margin[t]:.2} |"
+            f"| `{t}` | {len(checks[t])} | {fails[t]}/{runs[t]} | {worst_z[t]:.2f} | "
+            f"{bound[t]:.2f} | {margin[t]:.2f} |"
         )
     total = sum(fails.values()) + sum(other_failures.values())
     lines = [

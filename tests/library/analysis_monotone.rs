@@ -1,83 +1,141 @@
 //! The paper's estimator is stable (SPEC §5): a sharper lobe never gets a
-//! larger `alpha_D`. Steps up of at most 2 % are tolerated (the estimator
-//! is an average of clusterings of discrete sample sets, measured largest
-//! step: 1.7 % near n = 878). The function values reported by `analyze`
-//! (normal incidence for BRDFs) over the ranges it accepts.
+//! larger `alpha_D` beyond the small steps of its discrete sample sets. The
+//! function values reported by `analyze` (normal incidence for BRDFs) over
+//! the ranges it accepts.
+//!
+//! At one seed the estimator is a deterministic function of the parameter
+//! (`src/analysis` is pure: no Embree, no threads), but which steps it
+//! takes, and how large the largest step up is, depend on the seed: over 16
+//! seeds the largest step up over cos^n, n = 0..1000, was 1.57 % to 3.12 %
+//! (mean 1.83 %), over the Phong exponents 0 to 3.89 % (mean 1.05 %), over
+//! the Cook–Torrance roughnesses 0 to 0.65 % (mean 0.04 %)
+//! (`analysis_report::report_step_ups_over_seeds`). So the claim tested is
+//! about that largest step up as a random quantity: its mean over seeds is
+//! at most [`SLACK`], within 4 standard errors measured from the seeds'
+//! spread. The estimator's K = 24 averaged sets are what keep it there: a
+//! step is one set's jump divided by K (16 sets: 2.5 %; one set of 512:
+//! 10 %, 48 % on Phong; i.i.d. samples: 10 %).
 
 use adaptive_pm::analysis::{analyze_brdf_at, analyze_emitter, AnalysisParams, Estimator};
 use adaptive_pm::brdf::{Brdf, CookTorrance, Phong};
 use adaptive_pm::emitter::CosN;
 use glam::Vec3;
+use rayon::prelude::*;
 
-const SLACK: f32 = 1.02;
+use crate::common;
 
-/// Checks that `alphas` (ordered from wide to sharp) never step up by more
-/// than the slack, and names the first offender.
-fn assert_non_increasing(what: &str, params: &[f32], alphas: &[f32]) {
-    for i in 1..alphas.len() {
-        assert!(
-            alphas[i] <= alphas[i - 1] * SLACK,
-            "{what}: alpha_D({}) = {} > alpha_D({}) = {} (+{:.1} %)",
-            params[i],
-            alphas[i],
-            params[i - 1],
-            alphas[i - 1],
-            (alphas[i] / alphas[i - 1] - 1.0) * 100.0
+/// The mean over seeds of the largest relative step up that the tests allow.
+const SLACK: f64 = 0.02;
+
+fn params(s: u64) -> AnalysisParams {
+    AnalysisParams {
+        seed: common::seed(AnalysisParams::default().seed.wrapping_add(s)),
+        ..Default::default()
+    }
+}
+
+/// `alpha(x, params(s))` over `xs` (wide to sharp) for seeds `0..seeds`,
+/// one row per seed.
+fn curves(
+    seeds: u64,
+    xs: &[f32],
+    alpha: impl Fn(f32, &AnalysisParams) -> f32 + Sync,
+) -> Vec<Vec<f32>> {
+    (0..seeds)
+        .map(|s| {
+            let p = params(s);
+            xs.par_iter().map(|&x| alpha(x, &p)).collect()
+        })
+        .collect()
+}
+
+/// The largest relative step up of `alphas` (0 when it never rises), and
+/// where.
+fn largest_step_up(alphas: &[f32]) -> (f64, usize) {
+    (1..alphas.len())
+        .map(|i| ((alphas[i] as f64 / alphas[i - 1] as f64 - 1.0).max(0.0), i))
+        .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a })
+}
+
+/// The mean over seeds of the largest step up is at most [`SLACK`], within 4
+/// of its standard errors measured from the seeds' spread (one-sided: only
+/// an excess counts). When every seed has the same largest step (none, for
+/// instance) there is no noise and it must not exceed the slack.
+fn assert_steps_small(what: &str, xs: &[f32], curves: &[Vec<f32>]) {
+    let steps: Vec<(f64, usize)> = curves.iter().map(|a| largest_step_up(a)).collect();
+    for (s, &(m, i)) in steps.iter().enumerate() {
+        eprintln!(
+            "{what} seed {s}: largest step up {:.2} % at {}",
+            100.0 * m,
+            xs[i]
         );
+    }
+    let m = common::MeanVar::of(steps.iter().map(|s| s.0));
+    let check = format!("{what} mean largest step up");
+    if m.variance() == 0.0 {
+        assert!(m.mean() <= SLACK, "{check}: {} at every seed", m.mean());
+    } else {
+        eprintln!(
+            "{check}: {:.2} % +- {:.2} %",
+            100.0 * m.mean(),
+            100.0 * m.std_error()
+        );
+        common::assert_sigmas(&check, (m.mean() - SLACK).max(0.0), m.std_error(), 4.0);
     }
 }
 
 #[test]
 fn cosn_every_integer_n_up_to_1000() {
-    let p = AnalysisParams::default();
+    // 4 seeds, the analyses in parallel (a seed is 1001 analyses, 0.9 s of
+    // CPU); the largest step up has a seed-to-seed sd of 0.4 %.
     let ns: Vec<f32> = (0..=1000).map(|n| n as f32).collect();
-    let a: Vec<f32> = ns
-        .iter()
-        .map(|&n| {
-            analyze_emitter(&CosN::new(n).unwrap(), Estimator::Paper, &p)
-                .unwrap()
-                .alpha_d
-        })
-        .collect();
-    assert_non_increasing("cos^n", &ns, &a);
-    assert_eq!(a[0], 1.0);
-    assert!(a[1000] < 0.01, "alpha_D(1000) = {}", a[1000]);
+    let a = curves(4, &ns, |n, p| {
+        analyze_emitter(&CosN::new(n).unwrap(), Estimator::Paper, p)
+            .unwrap()
+            .alpha_d
+    });
+    assert_steps_small("cos^n", &ns, &a);
+    // cos^0 is constant: diffuse at any seed.
+    assert!(a.iter().all(|a| a[0] == 1.0));
+    // alpha_D(1000) (about 0.005, seed-to-seed sd 1e-4) is below 0.01 within
+    // 4 standard errors of its mean over the seeds.
+    let last = common::MeanVar::of(a.iter().map(|a| a[1000] as f64));
+    common::assert_sigmas(
+        "cos^1000 alpha below 0.01",
+        (last.mean() - 0.01).max(0.0),
+        last.std_error(),
+        4.0,
+    );
 }
 
 #[test]
 fn phong_exponents_geometric_up_to_1e4() {
-    let p = AnalysisParams::default();
     let es: Vec<f32> = (0..=190).map(|i| 1.05f32.powi(i) - 1.0).collect();
-    let a: Vec<f32> = es
-        .iter()
-        .map(|&e| {
-            let b: Brdf = Phong::new(Vec3::ZERO, Vec3::splat(0.9), e).unwrap().into();
-            analyze_brdf_at(&b, 1.0, Estimator::Paper, &p)
-                .unwrap()
-                .alpha_d
-        })
-        .collect();
-    assert_non_increasing("Phong", &es, &a);
+    // 8 seeds: the largest step up spreads from 0 to 4 % (sd 1.2 %).
+    let a = curves(8, &es, |e, p| {
+        let b: Brdf = Phong::new(Vec3::ZERO, Vec3::splat(0.9), e).unwrap().into();
+        analyze_brdf_at(&b, 1.0, Estimator::Paper, p)
+            .unwrap()
+            .alpha_d
+    });
+    assert_steps_small("Phong", &es, &a);
 }
 
 #[test]
 fn cook_torrance_rougher_is_never_smaller() {
-    let p = AnalysisParams::default();
     // from the roughest (1) to nearly a mirror, over the accepted [1e-4, 1]
     let ms: Vec<f32> = (0..=100)
         .map(|i| 1.0 - i as f32 * 0.0099)
         .chain([5e-3, 1e-3, CookTorrance::MIN_ROUGHNESS])
         .collect();
-    let a: Vec<f32> = ms
-        .iter()
-        .map(|&m| {
-            let b: Brdf = CookTorrance::new(m, Vec3::splat(0.9), Vec3::ZERO)
-                .unwrap()
-                .into();
-            analyze_brdf_at(&b, 1.0, Estimator::Paper, &p)
-                .unwrap()
-                .alpha_d
-        })
-        .collect();
-    assert_non_increasing("Cook-Torrance", &ms, &a);
+    // 4 seeds: the largest step up is 0 at almost every seed.
+    let a = curves(4, &ms, |m, p| {
+        let b: Brdf = CookTorrance::new(m, Vec3::splat(0.9), Vec3::ZERO)
+            .unwrap()
+            .into();
+        analyze_brdf_at(&b, 1.0, Estimator::Paper, p)
+            .unwrap()
+            .alpha_d
+    });
+    assert_steps_small("Cook-Torrance", &ms, &a);
 }

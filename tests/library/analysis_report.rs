@@ -126,3 +126,69 @@ fn report_convergence() {
         }
     }
 }
+
+/// The largest relative step up of `alpha_D` over the ranges of
+/// `analysis_monotone.rs` at 16 seeds (`FAMILY=cos|phong|ct`, default all),
+/// the measurement behind its slack: the step's size depends on the seed.
+#[test]
+#[ignore]
+fn report_step_ups_over_seeds() {
+    fn largest_step_up(a: &[f32]) -> (f32, usize) {
+        (1..a.len())
+            .map(|i| ((a[i] / a[i - 1] - 1.0).max(0.0), i))
+            .fold((0.0, 0), |m, x| if x.0 > m.0 { x } else { m })
+    }
+    let only = std::env::var("FAMILY").ok();
+    for fam in ["cos", "phong", "ct"] {
+        if only.as_deref().is_some_and(|f| f != fam) {
+            continue;
+        }
+        let mut all = Vec::new();
+        for s in 0..16u64 {
+            let p = AnalysisParams {
+                seed: AnalysisParams::default().seed.wrapping_add(s),
+                ..Default::default()
+            };
+            let a: Vec<f32> = match fam {
+                "cos" => (0..=1000)
+                    .map(|n| {
+                        analyze_emitter(&CosN::new(n as f32).unwrap(), Estimator::Paper, &p)
+                            .unwrap()
+                            .alpha_d
+                    })
+                    .collect(),
+                "phong" => (0..=190)
+                    .map(|i| {
+                        let e = 1.05f32.powi(i) - 1.0;
+                        let b: Brdf = Phong::new(Vec3::ZERO, Vec3::splat(0.9), e).unwrap().into();
+                        analyze_brdf_at(&b, 1.0, Estimator::Paper, &p)
+                            .unwrap()
+                            .alpha_d
+                    })
+                    .collect(),
+                _ => (0..=100)
+                    .map(|i| 1.0 - i as f32 * 0.0099)
+                    .chain([5e-3, 1e-3, CookTorrance::MIN_ROUGHNESS])
+                    .map(|m| {
+                        let b: Brdf = CookTorrance::new(m, Vec3::splat(0.9), Vec3::ZERO)
+                            .unwrap()
+                            .into();
+                        analyze_brdf_at(&b, 1.0, Estimator::Paper, &p)
+                            .unwrap()
+                            .alpha_d
+                    })
+                    .collect(),
+            };
+            let (m, i) = largest_step_up(&a);
+            println!(
+                "{fam} seed {s}: largest step up {:.2} % at index {i}",
+                m * 100.0
+            );
+            all.push(m as f64);
+        }
+        let mean = all.iter().sum::<f64>() / all.len() as f64;
+        let sd =
+            (all.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (all.len() - 1) as f64).sqrt();
+        println!("{fam}: mean {:.2} % sd {:.2} %", 100.0 * mean, 100.0 * sd);
+    }
+}

@@ -1,12 +1,19 @@
 //! Oracles for the reflection models: chi-square of every sampler against
 //! its pdf, energy conservation, reciprocity, sample-weight consistency,
-//! extremes and parameter validation. Fixed seeds throughout.
+//! extremes and parameter validation.
+//!
+//! The chi-square and Monte Carlo albedo tests take their seeds through
+//! `common::seed` and report through its helpers; reciprocity, weights and
+//! extremes are checked on every sample (exact up to f32 rounding), so their
+//! fixed seeds only pick the inputs.
 
 use adaptive_pm::brdf::{from_gltf_pbr, Brdf, CookTorrance, Lambert, Mirror, Phong};
 use adaptive_pm::rng::Rng;
 use adaptive_pm::sampling::{phi_of, spherical_direction};
 use glam::Vec3;
 use std::f64::consts::PI;
+
+use crate::common;
 
 fn wi_at(cos: f32) -> Vec3 {
     spherical_direction(cos, 0.3)
@@ -55,21 +62,35 @@ fn glossy_models() -> Vec<(&'static str, Brdf)> {
     ]
 }
 
-/// Upper quantile of chi-square with k degrees of freedom at p = 1e-4, by
-/// Wilson–Hilferty (z = 3.719 is the standard normal's 1 - 1e-4 quantile).
-fn chi2_quantile_1e4(k: f64) -> f64 {
-    let z = 3.719_016;
+/// Standard normal upper quantile at p = 1e-5: a chi-square statistic whose
+/// Wilson–Hilferty z exceeds it fails.
+const Z_1E5: f64 = 4.265;
+
+/// Wilson–Hilferty: for X ~ chi-square(k), `(X / k)^(1/3)` is close to
+/// normal with mean `1 - 2 / (9k)` and variance `2 / (9k)`; the z of `stat`.
+fn wilson_hilferty_z(stat: f64, k: f64) -> f64 {
+    let a = 2.0 / (9.0 * k);
+    ((stat / k).cbrt() - (1.0 - a)) / a.sqrt()
+}
+
+/// The chi-square quantile the z threshold `z` stands for (inverse of
+/// [`wilson_hilferty_z`]).
+fn chi2_quantile(z: f64, k: f64) -> f64 {
     let a = 2.0 / (9.0 * k);
     k * (1.0 - a + z * a.sqrt()).powi(3)
 }
 
 /// Chi-square test of `b.sample(wi, .)` against `b.pdf(wi, .)` on a grid of
 /// equal-solid-angle cells in (cos theta, phi), expected counts from a
-/// 12 x 12 midpoint quadrature of the pdf in each cell.
+/// 32 x 32 midpoint quadrature of the pdf in each cell. (12 x 12 left a
+/// systematic excess on the Cook–Torrance m = 0.2 lobe at cos_i = 0.05, a
+/// narrow lobe at the horizon: mean |z| 2.4 over a 32-seed sweep and z = 5.1
+/// at the worst seed; at 24 x 24 its mean z was 0.25, at 48 x 48 0.) Returns the
+/// statistic and its degrees of freedom.
 fn chi2(b: &Brdf, wi: Vec3, seed: u64) -> (f64, f64) {
     const KC: usize = 12;
     const KP: usize = 24;
-    const SUB: usize = 12;
+    const SUB: usize = 32;
     const N: usize = 120_000;
     let mut expected = vec![0.0f64; KC * KP + 1];
     let cell_sr = 2.0 * PI / (KC * KP) as f64;
@@ -133,19 +154,23 @@ fn chi2(b: &Brdf, wi: Vec3, seed: u64) -> (f64, f64) {
         stat += (po - pe) * (po - pe) / pe;
         dof += 1;
     } else if po > 0.0 {
-        return (f64::INFINITY, 0.0);
+        return (f64::INFINITY, 1.0);
     }
-    (stat, chi2_quantile_1e4((dof - 1) as f64))
+    (stat, (dof - 1) as f64)
 }
 
 #[test]
 fn samplers_match_their_pdfs() {
+    // 28 chi-square tests, each failing at p < 1e-5 (Wilson–Hilferty z above
+    // 4.265), reported as z with sigma = 1.
     for (name, b) in glossy_models() {
         for (k, cos) in [1.0f32, 0.7, 0.3, 0.05].into_iter().enumerate() {
-            let (stat, limit) = chi2(&b, wi_at(cos), 100 + k as u64);
-            assert!(
-                stat < limit,
-                "{name} cos_i={cos}: chi2 {stat:.1} > {limit:.1}"
+            let (stat, dof) = chi2(&b, wi_at(cos), common::seed(100 + k as u64));
+            common::assert_within_noise(
+                &format!("{name} cos_i={cos} chi2 z"),
+                wilson_hilferty_z(stat, dof),
+                1.0,
+                Z_1E5,
             );
         }
     }
@@ -153,25 +178,35 @@ fn samplers_match_their_pdfs() {
 
 #[test]
 fn wilson_hilferty_is_close_to_tabulated_quantiles() {
-    // chi-square 1e-4 upper quantiles: k=10 -> 35.56, k=100 -> 161.32, k=300 -> 399.76 (exact, by bisection of the regularised gamma)
-    assert!((chi2_quantile_1e4(10.0) - 35.56).abs() < 0.5);
-    assert!((chi2_quantile_1e4(100.0) - 161.32).abs() < 0.5);
-    assert!((chi2_quantile_1e4(300.0) - 399.76).abs() < 0.5);
+    // chi-square upper quantiles (exact, by bisection of the regularised
+    // gamma): p = 1e-4: k=10 -> 35.56, k=100 -> 161.32, k=300 -> 399.76;
+    // p = 1e-5: k=10 -> 41.30, k=100 -> 172.10, k=300 -> 416.13. The
+    // approximation is within 0.25 from k = 100 up, 0.4 and 0.7 at k = 10.
+    // The samplers' tests have 27 to 287 degrees of freedom (cells expecting
+    // fewer than 5 are pooled); at k = 27 the exact 1e-5 quantile has a
+    // Wilson–Hilferty z of 4.236, so the threshold 4.265 is p < 1e-5 there too.
+    for (z, k, q, tol) in [
+        (3.719_016, 10.0, 35.56, 0.5),
+        (3.719_016, 100.0, 161.32, 0.2),
+        (3.719_016, 300.0, 399.76, 0.2),
+        (Z_1E5, 10.0, 41.30, 0.8),
+        (Z_1E5, 100.0, 172.10, 0.25),
+        (Z_1E5, 300.0, 416.13, 0.2),
+    ] {
+        assert!((chi2_quantile(z, k) - q).abs() < tol, "k={k} z={z}");
+        assert!((wilson_hilferty_z(chi2_quantile(z, k), k) - z).abs() < 1e-9);
+    }
 }
 
-/// Monte Carlo albedo (mean sample weight) and its standard error.
+/// Monte Carlo albedo (mean sample weight) and its standard error, measured
+/// from the samples.
 fn mc_albedo(b: &Brdf, wi: Vec3, n: usize, seed: u64) -> (f64, f64) {
     let mut r = Rng::new(seed);
-    let (mut s, mut s2) = (0.0f64, 0.0f64);
-    for _ in 0..n {
-        let w = b
-            .sample(wi, r.next_2d())
-            .map_or(0.0, |s| adaptive_pm::sampling::luminance(s.weight) as f64);
-        s += w;
-        s2 += w * w;
-    }
-    let m = s / n as f64;
-    (m, ((s2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
+    let m = common::MeanVar::of((0..n).map(|_| {
+        b.sample(wi, r.next_2d())
+            .map_or(0.0, |s| adaptive_pm::sampling::luminance(s.weight) as f64)
+    }));
+    (m.mean(), m.std_error())
 }
 
 #[test]
@@ -222,18 +257,34 @@ fn energy_is_conserved_and_albedo_matches_monte_carlo() {
     for (name, b) in worst {
         for (k, cos) in [1.0f32, 0.8, 0.5, 0.2, 0.05, 0.01].into_iter().enumerate() {
             let wi = wi_at(cos);
-            let (m, se) = mc_albedo(&b, wi, 40_000, 7 + k as u64);
+            let (m, se) = mc_albedo(&b, wi, 40_000, common::seed(7 + k as u64));
             let a = adaptive_pm::sampling::luminance(b.albedo(wi)) as f64;
-            // 5 standard errors of the estimate; the quadratures in albedo()
-            // get a further 0.01 (their resolution, 16 x 16 or 64 points).
-            assert!(
-                m <= 1.0 + 5.0 * se + 1e-6,
-                "{name} cos={cos}: MC albedo {m} > 1"
-            );
             assert!(a <= 1.0 + 1e-3, "{name} cos={cos}: albedo() {a} > 1");
-            assert!(
-                (a - m).abs() <= 5.0 * se + 0.01,
-                "{name} cos={cos}: albedo() {a} vs MC {m} +- {se}"
+            if se == 0.0 {
+                // Every sample has the same weight (Lambert: its albedo):
+                // nothing random to measure.
+                assert!(m <= 1.0 + 1e-6, "{name} cos={cos}: weight {m} > 1");
+                assert!((a - m).abs() <= 1e-6, "{name} cos={cos}: {a} vs {m}");
+                continue;
+            }
+            // 48 estimates, sigma their measured standard errors, 5 sigma.
+            // Energy: the MC albedo does not exceed 1 (one-sided: only an
+            // excess counts).
+            // The weights are f32: a lossless model (f0 = 1) rounds them
+            // about 1 by up to 1e-7 each, a systematic 1e-6 allowance.
+            common::assert_within_noise(
+                &format!("{name} cos={cos} MC albedo above 1"),
+                (m - 1.0).max(0.0),
+                se,
+                5.0 * se + 1e-6,
+            );
+            // albedo() against MC: the quadratures in albedo() get a further
+            // 0.01 (their resolution, 16 x 16 or 64 points).
+            common::assert_within_noise(
+                &format!("{name} cos={cos} albedo() vs MC"),
+                a - m,
+                se,
+                5.0 * se + 0.01,
             );
         }
     }

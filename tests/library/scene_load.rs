@@ -8,6 +8,8 @@ use serde_json::json;
 use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
 
+use crate::common;
+
 fn asset() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell_box.gltf")
 }
@@ -213,17 +215,24 @@ fn nan_positions_are_an_error_and_degenerate_triangles_are_skipped() {
 fn surface_points_are_area_uniform_and_fixed_by_seed() {
     let s = Scene::cornell().unwrap();
     let sampler = s.surface_sampler();
-    let a = sampler.points(20_000, 1);
-    assert_eq!(a, sampler.points(20_000, 1));
-    assert_ne!(a[..10], sampler.points(10, 2)[..]);
-    // the floor's share of points matches its share of area (binomial tolerance, 5 sigma)
+    let (seed, other) = (common::seed(1), common::seed(2));
+    let a = sampler.points(20_000, seed);
+    assert_eq!(a, sampler.points(20_000, seed));
+    assert_ne!(a[..10], sampler.points(10, other)[..]);
+    // The floor's share of points matches its share of area: the points are
+    // independent (point i depends only on the seed and i), so the share's
+    // standard error is measured from the points' floor indicators; 5 sigma.
     let floor = s
         .meshes()
         .iter()
         .position(|m| m.name.starts_with("floor"))
         .unwrap();
     let frac = s.meshes()[floor].area() as f64 / sampler.total_area();
-    let got = a.iter().filter(|p| p.mesh == floor).count() as f64 / a.len() as f64;
-    let sd = (frac * (1.0 - frac) / a.len() as f64).sqrt();
-    assert!((got - frac).abs() < 5.0 * sd, "floor share {got} vs {frac}");
+    let share = common::MeanVar::of(a.iter().map(|p| f64::from(u8::from(p.mesh == floor))));
+    common::assert_sigmas(
+        "floor share of surface points",
+        share.mean() - frac,
+        share.std_error(),
+        5.0,
+    );
 }
