@@ -47,9 +47,11 @@ pub struct AnalysisParams {
     /// `cos^n`; averaging K sets of N splits each step into K steps K times
     /// smaller at the clustering cost of K N^2 (against (K N)^2 for one set).
     /// Measured (`tests/library/analysis_monotone.rs`): with 24 x 128 the largest
-    /// step up is 1.7 % over cos^n, n = 0..1000, under 1 % over Phong
-    /// exponents and Cook–Torrance roughness; with 16 x 128 it was 2.5 %,
-    /// with one set of 512, 10 % (and 48 % for Phong).
+    /// step up over cos^n, n = 0..1000, is 1.7 % at the default seed and
+    /// 1.57-3.12 % over 16 seeds (mean 1.83 %); over Phong exponents 0-3.89 %
+    /// (mean 1.05 %; `cargo test --test library analysis_report::report_step_ups_over_seeds
+    /// -- --ignored --nocapture`). With 16 x 128 it was 2.5 % at the default
+    /// seed, with one set of 512, 10 % (and 48 % for Phong).
     pub sets: usize,
     /// Strata along `cos theta` of the equal-solid-angle grid (default 16).
     pub grid_cos_theta: usize,
