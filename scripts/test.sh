@@ -17,7 +17,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
+stage_start=$SECONDS
 cargo test --workspace --locked
+echo "test.sh: the cargo test stage took $((SECONDS - stage_start)) s" >&2
 bash scripts/ci-pinned-isa.sh
 bash scripts/seed-sweep.sh "${SEED_SWEEP_N:-4}"
 cargo package --workspace --exclude adaptive-pm-downstream --locked --allow-dirty
@@ -33,3 +35,4 @@ if rustup toolchain list 2>/dev/null | grep -q '^nightly'; then
 else
     echo "test.sh: no nightly toolchain: the fuzzer (scripts/ci-fuzz.sh) is skipped" >&2
 fi
+echo "test.sh: all stages passed in $SECONDS s" >&2
