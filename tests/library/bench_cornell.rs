@@ -22,7 +22,11 @@ fn sweep() -> &'static (CornellResults, tempfile::TempDir, Vec<PathBuf>) {
         let mut cfg = CornellConfig::paper();
         cfg.n_values = parse_sweep("0,20,200").unwrap();
         cfg.n_max = N_MAX;
+        cfg.seed = crate::common::seed(1);
         let r = run_cornell(&cfg, &|_| {}).unwrap();
+        for x in &r.runs {
+            eprintln!("XC {:?} n {} emitted {} maxdp {:.4e} reemit {} alpha {:.4} paper {:.4} rates {:?} hits {:?}", x.mode, x.n, x.emitted, x.max_density_primary, x.reemitted_first_hit, x.alpha_d, x.alpha_d_paper, x.split_rate_by_depth, x.hits_by_depth);
+        }
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("nested/out");
         let files = write_outputs(&r, &out).unwrap();
