@@ -16,6 +16,8 @@ from pathlib import Path
 
 LINE = re.compile(r"seed-sweep: test=(\S+) check=(\S+) z=(\S+) bound_sigmas=(\S+) ok=(\S+)")
 FAILED = re.compile(r"^test (\S+) \.\.\. FAILED", re.M)
+# libtest's closing list (also under -q): "failures:" then "    name" lines.
+FAILURE_LIST = re.compile(r"^failures:\n((?:    \S+\n)+)", re.M)
 
 
 def main() -> int:
@@ -42,13 +44,19 @@ def main() -> int:
             worst_z[test] = max(worst_z[test], z)
             bound[test] = min(bound[test], b)
             margin[test] = min(margin[test], b - z)
+        failed = set(m[1] for m in FAILED.finditer(text))
+        for block in FAILURE_LIST.finditer(text):
+            failed.update(line.strip() for line in block[1].splitlines())
+        failed.update(m[1] for m in LINE.finditer(text) if m[5] != "true")
         for t in seen:
             runs[t] += 1
-        for m in FAILED.finditer(text):
-            if m[1] in checks or m[1] in seen:
-                fails[m[1]] += 1
+        for t in failed:
+            if t in checks or t in seen:
+                fails[t] += 1
             else:
-                other_failures[m[1]] += 1
+                other_failures[t] += 1
+    # A test reports a line only from the checks it reaches; "runs" counts
+    # the seeds whose log holds one (one-sided checks log only a margin).
     rows = [
         "| test | checks | failures | worst z | narrowest bound | worst margin |",
         "|---|---:|---:|---:|---:|---:|",
