@@ -55,7 +55,7 @@ fn the_box_closed_by_a_front_wall_traps_every_ray() {
         .unwrap();
     let device = Device::new().unwrap();
     let rt = scene.embree_geometry(&device).unwrap();
-    let mut rng = Rng::new(11);
+    let mut rng = Rng::new(crate::common::seed(11));
     let mut escaped_open = 0;
     let open_rt = Scene::cornell().unwrap().embree_geometry(&device).unwrap();
     for _ in 0..100_000 {
@@ -93,6 +93,9 @@ fn the_box_closed_by_a_front_wall_traps_every_ray() {
             escaped_open += 1;
         }
     }
-    // without the front wall, rays towards -z do get out
+    // Without the front wall, rays towards -z do get out: a sanity bound,
+    // not a statistical one (~15 % of 1e5 rays escape, binomial sd ~110, so
+    // 1000 is ~130 sd below).
+    eprintln!("{escaped_open} of 100000 rays left the open box");
     assert!(escaped_open > 1000, "{escaped_open}");
 }

@@ -227,7 +227,7 @@ fn surface_points_are_area_uniform_and_fixed_by_seed() {
         .iter()
         .position(|m| m.name.starts_with("floor"))
         .unwrap();
-    let frac = s.meshes()[floor].area() as f64 / sampler.total_area();
+    let frac = s.meshes()[floor].area() / sampler.total_area();
     let share = common::MeanVar::of(a.iter().map(|p| f64::from(u8::from(p.mesh == floor))));
     common::assert_sigmas(
         "floor share of surface points",
