@@ -116,10 +116,7 @@ pub struct EmbreeArgs {
 impl EmbreeArgs {
     /// The Embree device of these settings.
     pub fn device(&self) -> anyhow::Result<Device> {
-        Ok(match self.embree_isa {
-            Some(isa) => Device::with_isa(isa)?,
-            None => Device::new()?,
-        })
+        Ok(Device::pinned_or_default(self.embree_isa)?)
     }
 }
 

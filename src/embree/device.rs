@@ -198,6 +198,15 @@ impl Device {
         Self::with_config(&format!("isa={isa}"))
     }
 
+    /// [`Device::with_isa`] for `Some`, [`Device::new`] for `None`: the
+    /// device of a setting that may pin a kernel set.
+    ///
+    /// # Errors
+    /// As those two.
+    pub fn pinned_or_default(pin: Option<Isa>) -> Result<Device> {
+        pin.map_or_else(Self::new, Self::with_isa)
+    }
+
     /// A device with an Embree configuration string, e.g. `"threads=2,verbose=1"`
     /// (see `rtcNewDevice(3)`). An `isa=` or `max_isa=` item must name a
     /// kernel set ([`Isa`]) that this CPU runs: Embree itself would run SSE2

@@ -481,7 +481,7 @@ pub fn run_cornell(
         )));
     }
     let mesh_names: Vec<String> = scene.meshes().iter().map(|m| m.name.clone()).collect();
-    let device = cfg.embree_isa.map_or_else(Device::new, Device::with_isa)?;
+    let device = Device::pinned_or_default(cfg.embree_isa)?;
     let rt = scene.embree_geometry(&device)?;
     let points = scene
         .surface_sampler()

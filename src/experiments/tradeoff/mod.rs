@@ -243,9 +243,7 @@ pub fn run_tradeoff(
     cfg.validate()?;
     scene.validate()?;
     let start = std::time::Instant::now();
-    let device = cfg
-        .embree_isa
-        .map_or_else(crate::embree::Device::new, crate::embree::Device::with_isa)?;
+    let device = crate::embree::Device::pinned_or_default(cfg.embree_isa)?;
     let rt = scene.embree_geometry(&device)?;
     let total = cfg.modes.len() * cfg.budgets.len() * cfg.seeds as usize;
     let say = |done: usize, stage: String| progress(Progress { done, total, stage });
