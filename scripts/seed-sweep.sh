@@ -7,8 +7,9 @@
 #
 # Each seeded test mixes ADAPTIVE_PM_TEST_SEED into its own seed
 # (tests/common/mod.rs, `seed`), and reports each check as a `seed-sweep:`
-# line (`assert_within_noise`). Seed 1 runs the whole library suite to find
-# those tests; seeds 2..N run only them. ADAPTIVE_PM_EMBREE_ISA, if set,
+# line (`assert_within_noise`) to the file ADAPTIVE_PM_SWEEP_LOG names.
+# Seed 1 runs the whole library suite to find those tests; seeds 2..N run
+# only them. ADAPTIVE_PM_EMBREE_ISA, if set,
 # pins Embree's kernel set for every run. Exits 1 when any run failed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,12 +27,13 @@ trap 'rm -rf "$logs"' EXIT
 cargo test --locked --test library --no-run -q 2>/dev/null || cargo test --locked --test library --no-run
 run() { # seed, filters...
   local k=$1; shift
-  ADAPTIVE_PM_TEST_SEED=$k cargo test --locked -q --test library -- --nocapture "$@" >"$logs/$k.log" 2>&1 || true
+  ADAPTIVE_PM_TEST_SEED=$k ADAPTIVE_PM_SWEEP_LOG="$logs/$k.sweep" cargo test --locked -q --test library -- --nocapture "$@" >"$logs/$k.log" 2>&1 || true
 }
 start=$(date +%s)
 echo "seed-sweep: seed 1/$n (the whole library suite)" >&2
 run 1
-mapfile -t tests < <(sed -n 's/^seed-sweep: test=\([^ ]*\) .*/\1/p' "$logs/1.log" | sort -u)
+touch "$logs/1.sweep"
+mapfile -t tests < <(sed -n 's/^seed-sweep: test=\([^ ]*\) .*/\1/p' "$logs/1.sweep" | sort -u)
 if [ ${#tests[@]} -eq 0 ]; then
   echo "seed-sweep: no test printed a seed-sweep line" >&2
   cat "$logs/1.log" >&2

@@ -3,7 +3,9 @@
 (one per seed) that scripts/seed-sweep.sh collects.
 
 A test fails a seed when libtest says so (`test NAME ... FAILED`), whatever
-it printed. Each `seed-sweep:` line is one check of one test: the deviation
+it printed. Each `seed-sweep:` line is one check of one test, read from the
+`.sweep` file beside each log (the tests append whole lines to it; in the log
+itself, progress dots and parallel tests' output break lines apart): the deviation
 in sigmas (z) and the bound in sigmas. The table gives, per test, the
 failures out of the seeds run, the worst z, the narrowest bound and the
 worst margin (bound - z, in sigmas). Exit status 1 when any run failed.
@@ -14,7 +16,9 @@ import sys
 from collections import defaultdict
 from pathlib import Path
 
-LINE = re.compile(r"seed-sweep: test=(\S+) check=(\S+) z=(\S+) bound_sigmas=(\S+) ok=(\S+)")
+LINE = re.compile(
+    r"^seed-sweep: test=(\S+) check=(\S+) z=(\S+) bound_sigmas=(\S+) ok=(true|false)$", re.M
+)
 FAILED = re.compile(r"^test (\S+) \.\.\. FAILED", re.M)
 # libtest's closing list (also under -q): "failures:" then "    name" lines.
 FAILURE_LIST = re.compile(r"^failures:\n((?:    \S+\n)+)", re.M)
@@ -36,8 +40,10 @@ def main() -> int:
     other_failures = defaultdict(int)
     for log in a.logs:
         text = log.read_text(errors="replace")
+        sweep = log.with_suffix(".sweep")
+        lines = sweep.read_text(errors="replace") if sweep.exists() else text
         seen = set()
-        for m in LINE.finditer(text):
+        for m in LINE.finditer(lines):
             test, check, z, b = m[1], m[2], float(m[3]), float(m[4])
             seen.add(test)
             checks[test].add(check)
@@ -47,7 +53,7 @@ def main() -> int:
         failed = set(m[1] for m in FAILED.finditer(text))
         for block in FAILURE_LIST.finditer(text):
             failed.update(line.strip() for line in block[1].splitlines())
-        failed.update(m[1] for m in LINE.finditer(text) if m[5] != "true")
+        failed.update(m[1] for m in LINE.finditer(lines) if m[5] != "true")
         for t in seen:
             runs[t] += 1
         for t in failed:

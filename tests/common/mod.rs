@@ -88,10 +88,12 @@ pub fn assert_within_noise(check: &str, deviation: f64, sigma: f64, bound: f64) 
     let z = deviation.abs() / sigma;
     let bound_sigmas = bound / sigma;
     let ok = sigma.is_finite() && sigma > 0.0 && bound_sigmas >= MIN_SIGMAS && z <= bound_sigmas;
-    eprintln!(
-        "seed-sweep: test={test} check={} z={z:.3} bound_sigmas={bound_sigmas:.3} ok={ok}",
+    let line = format!(
+        "seed-sweep: test={test} check={} z={z:.3} bound_sigmas={bound_sigmas:.3} ok={ok}\n",
         check.replace(' ', "_")
     );
+    eprint!("{line}");
+    record_sweep_line(&line);
     assert!(
         sigma.is_finite() && sigma > 0.0,
         "{check}: the measured noise sigma = {sigma} is not finite and positive"
@@ -106,6 +108,28 @@ pub fn assert_within_noise(check: &str, deviation: f64, sigma: f64, bound: f64) 
         "{check}: deviation {deviation:+.4e} is {z:.2} sigma (sigma = {sigma:.4e} measured \
          here), outside the bound {bound:.4e} = {bound_sigmas:.2} sigma"
     );
+}
+
+/// Where the seed sweep collects its lines: libtest's progress dots and the
+/// output of tests running at the same time interleave with stderr mid-line,
+/// so `scripts/seed-sweep.sh` names a file of its own for them.
+pub const SWEEP_LOG_ENV: &str = "ADAPTIVE_PM_SWEEP_LOG";
+
+/// Appends one whole line to the sweep's file, if one is named: a single
+/// `write` on a file opened for appending, so lines of parallel tests never
+/// mix.
+fn record_sweep_line(line: &str) {
+    use std::io::Write;
+    let Some(path) = std::env::var_os(SWEEP_LOG_ENV) else {
+        return;
+    };
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path);
+    if let Err(e) = file.and_then(|mut f| f.write_all(line.as_bytes())) {
+        panic!("{SWEEP_LOG_ENV}={}: {e}", path.to_string_lossy());
+    }
 }
 
 /// [`assert_within_noise`] with the bound at exactly `k` sigmas (`k` at least
