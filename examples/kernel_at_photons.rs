@@ -29,6 +29,7 @@ fn main() {
             power: Vec3::ONE,
             direction: -Vec3::Y,
             depth: 0,
+            caustic: false,
         })
         .collect();
     let map = PhotonMap::build(&records);

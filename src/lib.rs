@@ -107,6 +107,7 @@
 //!         power: Vec3::splat(0.001),
 //!         direction: Vec3::NEG_Y,
 //!         depth: 0,
+//!         caustic: false,
 //!     })
 //!     .collect();
 //! let map = PhotonMap::build(&records);

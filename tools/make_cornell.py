@@ -7,6 +7,16 @@ With --empty it writes assets/cornell_empty.gltf instead: the same five walls,
 light, albedos and camera without the blocks (12 triangles), the paper's test
 scene (§3.2: "une source lumineuse et des parois idéalement diffuses").
 
+With --glass it writes assets/cornell_glass.gltf: the empty box and two spheres
+of radius 100 standing on the floor, a mirror (metallic 1, roughness 0) at
+(370, 100, 350) and a smooth glass ball (KHR_materials_transmission 1,
+KHR_materials_ior 1.5, KHR_materials_volume thicknessFactor 200: a refracting
+volume, no absorption) at (185, 100, 170). Both are one icosphere of 20480
+triangles (an icosahedron with a vertex at each pole, subdivided 5 times) with
+its vertices on the sphere, per-vertex normals and outward (counter-clockwise
+from outside) winding, placed by its node's translation; the two meshes share
+its accessors.
+
 The light sits 0.1 below the ceiling (y = 548.7) so the two never coincide,
 and faces down. The cos^n exponent of the light is the material's
 extras.cosn (0 = diffuse)."""
@@ -46,13 +56,106 @@ MATERIALS = [
      "extras": {"cosn": 0.0}},
 ]
 MAT_INDEX = {m["name"]: i for i, m in enumerate(MATERIALS)}
+SPHERE_RADIUS = 100.0
+SPHERE_LEVELS = 5
+# (name, material, centre); the materials follow MATERIALS in the glass scene.
+SPHERES = [
+    ("mirror_sphere", {"name": "mirror", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0}},
+     (370.0, SPHERE_RADIUS, 350.0)),
+    ("glass_sphere", {"name": "glass", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.0},
+                      "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                                     "KHR_materials_ior": {"ior": 1.5},
+                                     "KHR_materials_volume": {"thicknessFactor": 2.0 * SPHERE_RADIUS}}},
+     (185.0, SPHERE_RADIUS, 170.0)),
+]
+
+
+def icosphere(levels):
+    """Unit vectors and outward-wound triangles of an icosahedron with a vertex
+    at each pole (so a sphere on the floor touches it), each triangle split
+    into four `levels` times, new vertices pushed onto the sphere."""
+    ring = 1.0 / math.sqrt(5.0)
+    verts = [(0.0, 1.0, 0.0)]
+    for k in range(5):
+        a = 2.0 * math.pi * k / 5.0
+        verts.append((2.0 * ring * math.cos(a), ring, 2.0 * ring * math.sin(a)))
+    for k in range(5):
+        a = 2.0 * math.pi * (k + 0.5) / 5.0
+        verts.append((2.0 * ring * math.cos(a), -ring, 2.0 * ring * math.sin(a)))
+    verts.append((0.0, -1.0, 0.0))
+    up = lambda k: 1 + k % 5
+    low = lambda k: 6 + k % 5
+    tris = []
+    for k in range(5):
+        tris += [(0, up(k), up(k + 1)), (up(k), low(k), up(k + 1)),
+                 (up(k + 1), low(k), low(k + 1)), (11, low(k + 1), low(k))]
+
+    def outward(t):
+        a, b, c = (verts[i] for i in t)
+        e1 = [b[i] - a[i] for i in range(3)]
+        e2 = [c[i] - a[i] for i in range(3)]
+        n = (e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0])
+        centroid = [a[i] + b[i] + c[i] for i in range(3)]
+        return sum(n[i] * centroid[i] for i in range(3)) > 0.0
+
+    # Wind every face counter-clockwise seen from outside; splitting keeps it.
+    tris = [t if outward(t) else (t[0], t[2], t[1]) for t in tris]
+    for _ in range(levels):
+        mid = {}
+
+        def midpoint(i, j):
+            key = (min(i, j), max(i, j))
+            if key not in mid:
+                p = [verts[i][k] + verts[j][k] for k in range(3)]
+                n = math.sqrt(sum(x * x for x in p))
+                verts.append(tuple(x / n for x in p))
+                mid[key] = len(verts) - 1
+            return mid[key]
+
+        split = []
+        for a, b, c in tris:
+            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+            split += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        tris = split
+    assert all(outward(t) for t in tris)
+    return verts, tris
+
+
+def add_sphere_meshes(blob, accessors, views, gl_meshes, nodes, materials):
+    """The SPHERES: one icosphere's positions, normals and indices, shared by
+    one mesh per sphere (its own material), each placed by its node."""
+    verts, tris = icosphere(SPHERE_LEVELS)
+    first = len(accessors)
+    pos = [struct.unpack("<3f", struct.pack("<3f", *(SPHERE_RADIUS * x for x in v))) for v in verts]
+    for data, extra in ((pos, True), (verts, False)):
+        off = len(blob)
+        for v in data:
+            blob += struct.pack("<3f", *v)
+        views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(data), "target": 34962})
+        acc = {"bufferView": len(views) - 1, "componentType": 5126, "count": len(data), "type": "VEC3"}
+        if extra:
+            acc["min"] = [min(v[i] for v in data) for i in range(3)]
+            acc["max"] = [max(v[i] for v in data) for i in range(3)]
+        accessors.append(acc)
+    off = len(blob)
+    for t in tris:
+        blob += struct.pack("<3I", *t)
+    views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(tris), "target": 34963})
+    accessors.append({"bufferView": len(views) - 1, "componentType": 5125, "count": 3 * len(tris), "type": "SCALAR"})
+    for name, material, centre in SPHERES:
+        materials.append(material)
+        prim = {"attributes": {"POSITION": first, "NORMAL": first + 1}, "indices": first + 2, "material": len(materials) - 1}
+        gl_meshes.append({"name": name, "primitives": [prim]})
+        nodes.append({"name": name, "mesh": len(gl_meshes) - 1, "translation": list(centre)})
 
 
 def main():
-    empty = "--empty" in sys.argv[1:]
+    glass = "--glass" in sys.argv[1:]
+    empty = glass or "--empty" in sys.argv[1:]
     meshes = [(name, mat, [quad]) for name, (mat, quad) in QUADS.items()]
     if not empty:
         meshes += [(name, "white", quads) for name, quads in BLOCKS.items()]
+    materials = list(MATERIALS)
     blob = bytearray()
     accessors, views, gl_meshes, nodes = [], [], [], []
     for name, mat, quads in meshes:
@@ -75,22 +178,26 @@ def main():
         accessors.append({"bufferView": len(views) - 1, "componentType": 5125, "count": len(idx), "type": "SCALAR"})
         gl_meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1, "material": MAT_INDEX[mat]}]})
         nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
+    if glass:
+        add_sphere_meshes(blob, accessors, views, gl_meshes, nodes, materials)
     # glTF cameras look down their local -z: turn half a turn about y to look along +z.
     nodes.append({"name": "camera", "camera": 0, "translation": [278.0, 273.0, -800.0], "rotation": [0.0, 1.0, 0.0, 0.0]})
+    name = "cornell_glass" if glass else "cornell_empty" if empty else "cornell_box"
     doc = {
         "asset": {"version": "2.0", "generator": "adaptive-pm tools/make_cornell.py"},
-        "extensionsUsed": ["KHR_materials_emissive_strength"],
+        "extensionsUsed": ["KHR_materials_emissive_strength"]
+        + (["KHR_materials_ior", "KHR_materials_transmission", "KHR_materials_volume"] if glass else []),
         "scene": 0,
-        "scenes": [{"name": "cornell_empty" if empty else "cornell_box", "nodes": list(range(len(nodes)))}],
+        "scenes": [{"name": name, "nodes": list(range(len(nodes)))}],
         "nodes": nodes,
         "meshes": gl_meshes,
-        "materials": MATERIALS,
+        "materials": materials,
         "cameras": [{"type": "perspective", "perspective": {"yfov": math.radians(39.3077), "aspectRatio": 1.0, "znear": 1.0}}],
         "accessors": accessors,
         "bufferViews": views,
         "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(blob)).decode()}],
     }
-    out = "assets/cornell_empty.gltf" if empty else "assets/cornell_box.gltf"
+    out = "assets/" + ("cornell_glass" if glass else "cornell_empty" if empty else "cornell_box") + ".gltf"
     with open(out, "w") as f:
         json.dump(doc, f, indent=1)
         f.write("\n")

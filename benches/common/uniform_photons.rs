@@ -16,6 +16,7 @@ pub fn records(n: usize, seed: u64) -> Vec<PhotonRecord> {
             power: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
             direction: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5,
             depth: (rng.next_u32() % 4) as u8,
+            caustic: false,
         })
         .collect()
 }

@@ -27,6 +27,17 @@
 //! diffuse, `alpha_D = 1` with no peaks, the limit of a vanishing diffuse
 //! albedo (its photon count is 0 anyway through `alpha_E`).
 //!
+//! A transmitting BRDF (rough glass) scatters over the whole sphere, so it
+//! is analysed there ([`sampling::Domain::Sphere`]): twice the strata,
+//! normalised to the hemisphere's scale (integral 2) so that the variance
+//! threshold and the clustering's diffuse level keep their meaning, and
+//! `alpha_D = sum omega_i / 4 pi`, so that a diffuse transmitter gets 1 and a
+//! lobe of a given size half what it gets on the hemisphere (its photons
+//! spread over twice the directions). Smooth glass is a delta: `alpha_min`.
+//! The table is made for light arriving from outside; the tracer reads it at
+//! `|cos theta|` from inside too (alpha_D sets a photon count, never a
+//! weight, so that only changes variance).
+//!
 //! Analyses run once per distinct function ([`AnalysisCache`]); BRDFs are
 //! tabulated over theta_in ([`DirectionalityTable`]).
 //!
@@ -182,6 +193,7 @@ pub fn find_peaks(dirs: &[Vec3], values: &[f32], drawn: usize, p: &AnalysisParam
 /// the peaks listed are those of set 0.
 fn paper(target: Target<'_>, est: Estimator, p: &AnalysisParams) -> Directionality {
     let t = Instant::now();
+    let domain = sampling::Domain::of(&target);
     let set = sampling::sample(target, est.placement(), p);
     let sample_time = t.elapsed();
     if set.integral <= 0.0 || set.variance < p.variance_threshold {
@@ -193,7 +205,7 @@ fn paper(target: Target<'_>, est: Estimator, p: &AnalysisParams) -> Directionali
         let peaks = find_peaks(&set.dirs[start..end], &set.values[start..end], set.drawn, p);
         start = end;
         let omega: f32 = peaks.iter().map(|pk| pk.solid_angle).sum();
-        sum += (omega / (2.0 * std::f32::consts::PI)).clamp(p.alpha_min, 1.0) as f64;
+        sum += (omega / domain.solid_angle()).clamp(p.alpha_min, 1.0) as f64;
         first.get_or_insert(peaks);
     }
     Directionality {

@@ -55,6 +55,12 @@ impl Target<'_> {
         }
     }
 
+    /// Whether the function lives on the whole sphere (a transmitting
+    /// BRDF, a BTDF) rather than the hemisphere about the normal.
+    pub fn on_sphere(&self) -> bool {
+        matches!(self, Target::Brdf(b, _) if b.is_transmissive())
+    }
+
     fn key(&self) -> u64 {
         match *self {
             Target::CosN(n) => hash2(0xC05, n.to_bits() as u64),
@@ -85,20 +91,81 @@ pub struct SampleSet {
     pub max_projected: f32,
 }
 
-/// Equal-solid-angle stratum index of a direction.
+/// The domain of an analysed function: the hemisphere about the normal, or
+/// the whole sphere (the lower half mirrors the upper: the same bands of
+/// `cos theta` below the horizon, so a sphere has twice the strata).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Domain {
+    /// `cos theta` in [0, 1].
+    Hemisphere,
+    /// `cos theta` in [-1, 1].
+    Sphere,
+}
+
+impl Domain {
+    /// The domain of `target`.
+    pub fn of(target: &Target<'_>) -> Self {
+        if target.on_sphere() {
+            Domain::Sphere
+        } else {
+            Domain::Hemisphere
+        }
+    }
+
+    /// Bands of equal `cos theta` width.
+    pub fn bands(self, p: &AnalysisParams) -> usize {
+        match self {
+            Domain::Hemisphere => p.grid_cos_theta,
+            Domain::Sphere => 2 * p.grid_cos_theta,
+        }
+    }
+
+    /// Solid angle (sr).
+    pub fn solid_angle(self) -> f32 {
+        match self {
+            Domain::Hemisphere => 2.0 * PI,
+            Domain::Sphere => 4.0 * PI,
+        }
+    }
+
+    /// The lowest `cos theta`.
+    fn lowest_cos(self) -> f32 {
+        match self {
+            Domain::Hemisphere => 0.0,
+            Domain::Sphere => -1.0,
+        }
+    }
+}
+
+/// Equal-solid-angle stratum index of a direction on the hemisphere.
 #[inline]
 pub fn stratum_of(w: Vec3, p: &AnalysisParams) -> usize {
-    let (kc, kp) = (p.grid_cos_theta, p.grid_phi);
-    let i = ((w.z.clamp(0.0, 1.0) * kc as f32) as usize).min(kc - 1);
+    stratum_in(Domain::Hemisphere, w, p)
+}
+
+/// Centre of stratum `s` of the hemisphere.
+#[inline]
+pub fn stratum_centre(s: usize, p: &AnalysisParams) -> Vec3 {
+    stratum_centre_in(Domain::Hemisphere, s, p)
+}
+
+/// Equal-solid-angle stratum index of a direction in `domain`.
+#[inline]
+pub fn stratum_in(domain: Domain, w: Vec3, p: &AnalysisParams) -> usize {
+    let (kc, kp) = (domain.bands(p), p.grid_phi);
+    let lo = domain.lowest_cos();
+    let c = (w.z.clamp(lo, 1.0) - lo) / (1.0 - lo);
+    let i = ((c * kc as f32) as usize).min(kc - 1);
     let j = ((crate::sampling::phi_of(w) / (2.0 * PI) * kp as f32) as usize).min(kp - 1);
     i * kp + j
 }
 
-/// Centre of stratum `s`.
+/// Centre of stratum `s` of `domain`.
 #[inline]
-pub fn stratum_centre(s: usize, p: &AnalysisParams) -> Vec3 {
+pub fn stratum_centre_in(domain: Domain, s: usize, p: &AnalysisParams) -> Vec3 {
     let (i, j) = (s / p.grid_phi, s % p.grid_phi);
-    let c = (i as f32 + 0.5) / p.grid_cos_theta as f32;
+    let lo = domain.lowest_cos();
+    let c = lo + (i as f32 + 0.5) / domain.bands(p) as f32 * (1.0 - lo);
     let phi = (j as f32 + 0.5) / p.grid_phi as f32 * 2.0 * PI;
     spherical_direction(c, phi)
 }
@@ -176,7 +243,8 @@ fn points(
 /// stratified set of `p.sets * p.samples` points).
 pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> SampleSet {
     let n = p.samples * p.sets;
-    let s_count = p.grid_cos_theta * p.grid_phi;
+    let domain = Domain::of(&target);
+    let s_count = domain.bands(p) * p.grid_phi;
     let mut dirs = Vec::with_capacity(n);
     let mut raw = Vec::with_capacity(n);
     let mut pdfs = Vec::with_capacity(n);
@@ -184,7 +252,7 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
     for set in 0..p.sets {
         for u in points(&target, placement, set, p) {
             if let Some((w, pdf)) = target.sample(u) {
-                if w.z > 0.0 && w.is_finite() {
+                if (w.z > 0.0 || domain == Domain::Sphere) && w.is_finite() {
                     dirs.push(w);
                     raw.push(target.value(w));
                     pdfs.push(pdf);
@@ -197,12 +265,12 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
     let mut sum = vec![0.0f64; s_count];
     let mut cnt = vec![0u32; s_count];
     for (w, &v) in dirs.iter().zip(&raw) {
-        let s = stratum_of(*w, p);
+        let s = stratum_in(domain, *w, p);
         sum[s] += v as f64;
         cnt[s] += 1;
     }
     let mut max_projected = 0.0f32;
-    let uniform = s_count as f64 / (2.0 * std::f64::consts::PI);
+    let uniform = s_count as f64 / domain.solid_angle() as f64;
     let (integral, strata_raw) = match target {
         Target::CosN(e) => {
             let strata: Vec<f64> = (0..s_count)
@@ -222,14 +290,14 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
             let mut integral = 0.0f64;
             for ((w, &v), &pdf) in dirs.iter().zip(&raw).zip(&pdfs) {
                 integral += v as f64 / (n as f64 * pdf as f64 + uniform);
-                max_projected = max_projected.max(v * w.z);
+                max_projected = max_projected.max(v * w.z.abs());
             }
             let mut strata = Vec::with_capacity(s_count);
             for s in 0..s_count {
-                let c = stratum_centre(s, p);
+                let c = stratum_centre_in(domain, s, p);
                 let v = target.value(c);
                 integral += v as f64 / (n as f64 * b.pdf(wi, c) as f64 + uniform);
-                max_projected = max_projected.max(v * c.z);
+                max_projected = max_projected.max(v * c.z.abs());
                 strata.push(if cnt[s] > 0 {
                     sum[s] / cnt[s] as f64
                 } else {
@@ -250,7 +318,15 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
             ..SampleSet::default()
         };
     }
-    let inv = 1.0 / integral;
+    // A function on the sphere is normalised to integral 2 there: the
+    // hemisphere's scale, so that the diffuse level 1 / (2 pi) of the
+    // clustering and the variance threshold mean what they mean for a
+    // reflecting function (a diffuse transmitter's values sit at the
+    // diffuse level, like a Lambert BRDF's).
+    let inv = match domain {
+        Domain::Hemisphere => 1.0 / integral,
+        Domain::Sphere => 2.0 / integral,
+    };
     let strata: Vec<f32> = strata_raw.iter().map(|v| (v * inv) as f32).collect();
     let mean = strata.iter().map(|&v| v as f64).sum::<f64>() / s_count as f64;
     let variance = strata

@@ -7,7 +7,8 @@
 //! largest circular gap; when that gap is under pi the samples surround the
 //! normal and the arc is `2 pi`. The theta range always comes from the
 //! samples. `1 - cos theta` is computed as `(x^2 + y^2) / (1 + z)`, exact for
-//! the tiny lobes of exponents near 1e6 where `z` itself has lost its digits.
+//! the tiny lobes of exponents near 1e6 where `z` itself has lost its digits
+//! (and as `1 - z` below the horizon, for a transmission lobe).
 
 use crate::sampling::phi_of;
 use glam::Vec3;
@@ -39,7 +40,12 @@ pub fn solid_angle(dirs: &[Vec3]) -> f32 {
     let mut vmin = f32::INFINITY;
     let mut vmax = 0.0f32;
     for d in dirs {
-        let versine = (d.x * d.x + d.y * d.y) / (1.0 + d.z.max(0.0));
+        // Below the horizon (a transmission lobe) 1 - z loses nothing.
+        let versine = if d.z >= 0.0 {
+            (d.x * d.x + d.y * d.y) / (1.0 + d.z)
+        } else {
+            1.0 - d.z
+        };
         vmin = vmin.min(versine);
         vmax = vmax.max(versine);
     }

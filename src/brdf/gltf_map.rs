@@ -1,54 +1,266 @@
-//! From glTF 2.0 metallic-roughness materials to this crate's models.
+//! From glTF 2.0 materials to this crate's models: the core
+//! metallic-roughness factors and the extensions `KHR_materials_ior`,
+//! `KHR_materials_transmission` and `KHR_materials_volume`.
 //!
-//! Inputs: `base_color` (linear RGB in [0, 1]), `metallic` in [0, 1],
-//! `roughness` (glTF's perceptual roughness) in [0, 1].
+//! Inputs ([`GltfMaterial`]): `base_color` (linear RGB in [0, 1]), `metallic`
+//! in [0, 1], `roughness` (glTF's perceptual roughness) in [0, 1]; the
+//! extensions' factors, `None` when the extension is absent.
 //!
-//! The mapping, after the glTF specification's reference BRDF (Appendix B):
+//! # Opaque materials
+//! After the glTF specification's reference BRDF (Appendix B):
 //! - Beckmann roughness `m = roughness^2` (glTF's `alpha`; Beckmann and GGX
 //!   agree on the RMS slope for small values), clamped below at
 //!   [`CookTorrance::MIN_ROUGHNESS`];
-//! - Fresnel at normal incidence `f0 = mix(0.04, base_color, metallic)`
-//!   (0.04 is the glTF dielectric, IOR 1.5);
+//! - Fresnel at normal incidence `f0 = mix(f0_d, base_color, metallic)`, with
+//!   the dielectric `f0_d = ((ior - 1) / (ior + 1))^2` (`KHR_materials_ior`;
+//!   0.04 for the default IOR 1.5);
 //! - diffuse base `kd = base_color (1 - metallic)`.
 //!
 //! Special cases, checked in this order:
 //! 1. `metallic = 1` and `m < MIN_ROUGHNESS` (roughness below 0.01) →
 //!    [`Mirror`] of reflectance `base_color` (a polished metal);
-//! 2. `metallic = 0` and `roughness = 1` → [`Lambert`] of albedo `base_color`
-//!    (glTF's default material, and a matte dielectric whose 4 % specular
-//!    sheen the photon counts cannot tell from diffuse);
+//! 2. `metallic = 0`, `roughness = 1` and `f0_d <= 0.04` (IOR at most 1.5) →
+//!    [`Lambert`] of albedo `base_color` (glTF's default material, and a matte
+//!    dielectric whose 4 % specular sheen the photon counts cannot tell from
+//!    diffuse);
 //! 3. otherwise → [`CookTorrance`] with `(m, f0, kd)`.
 //!
 //! A dielectric with roughness below 0.01 keeps a Cook–Torrance lobe at the
 //! minimum roughness (no model here layers a mirror over a diffuse base).
+//!
+//! # Glass
+//! `transmissionFactor = 1` with `metallic = 0` is glass: [`Dielectric`] when
+//! `alpha = roughness^2` is below [`RoughDielectric::MIN_ALPHA`], else [`RoughDielectric`] of
+//! GGX `alpha`; both with the IOR, the tint `base_color` (the extension's
+//! "tinting") and, from `KHR_materials_volume`:
+//! - `thicknessFactor = 0` (the default, or no volume extension): a thin wall
+//!   (`thin = true`); it has no interior, so the attenuation is checked and
+//!   then has no effect (`sigma_a = 0`);
+//! - `thicknessFactor > 0`: the boundary of a refracting volume
+//!   (`thin = false`; the mesh must be closed), absorbing
+//!   `sigma_a = -ln(attenuationColor) / attenuationDistance` per channel and
+//!   world unit: 0 for the default infinite distance, [`f32::MAX`] for a
+//!   colour channel of 0. The thickness's value is otherwise unused (a ray
+//!   tracer measures the distance travelled).
+//!
+//! Not modelled, and refused rather than approximated:
+//! `0 < transmissionFactor < 1` (a mix of glass and the opaque base) and
+//! transmission on a metal (`metallic > 0`). The extensions' textures are
+//! ignored, like every texture.
+//!
+//! # The IOR
+//! Default 1.5. It must be in [1, 4] (the specification allows any value
+//! from 1; this crate's models stop at 4), or exactly 0: the specification's
+//! "specular-glossiness backwards compatibility mode", an infinite IOR whose
+//! Fresnel term is 1 at every angle. No light then enters the surface, so
+//! transmission and volume have no effect, and the material is the opaque
+//! mapping with `f0_d = 1` (Schlick's Fresnel with `f0 = 1` is 1 everywhere).
 
-use super::{Brdf, CookTorrance, Lambert, Mirror};
+use super::{Brdf, CookTorrance, Dielectric, Lambert, Mirror, RoughDielectric};
 use crate::error::{Error, Result};
 use glam::Vec3;
 
-/// Maps glTF `pbrMetallicRoughness` to a [`Brdf`] (see the module docs).
+/// The factors of a glTF material that the mapping reads (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GltfMaterial {
+    /// `pbrMetallicRoughness.baseColorFactor` without alpha (linear RGB).
+    pub base_color: Vec3,
+    /// `pbrMetallicRoughness.metallicFactor`.
+    pub metallic: f32,
+    /// `pbrMetallicRoughness.roughnessFactor` (perceptual roughness).
+    pub roughness: f32,
+    /// `KHR_materials_transmission.transmissionFactor`; `None` without the
+    /// extension (as 0: opaque).
+    pub transmission: Option<f32>,
+    /// `KHR_materials_ior.ior`; `None` without the extension (as 1.5).
+    pub ior: Option<f32>,
+    /// `KHR_materials_volume`; `None` without the extension (a thin wall).
+    pub volume: Option<GltfVolume>,
+}
+
+impl GltfMaterial {
+    /// The core factors alone, no extension.
+    pub fn new(base_color: Vec3, metallic: f32, roughness: f32) -> Self {
+        GltfMaterial {
+            base_color,
+            metallic,
+            roughness,
+            transmission: None,
+            ior: None,
+            volume: None,
+        }
+    }
+}
+
+/// The factors of `KHR_materials_volume` (its thickness texture is ignored).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GltfVolume {
+    /// `thicknessFactor`: 0 for a thin wall, > 0 for a volume boundary.
+    pub thickness: f32,
+    /// `attenuationDistance` in world units, > 0; [`f32::INFINITY`] (the
+    /// default) for no absorption.
+    pub attenuation_distance: f32,
+    /// `attenuationColor`: what white light becomes after
+    /// `attenuation_distance`, each channel in [0, 1].
+    pub attenuation_color: Vec3,
+}
+
+impl Default for GltfVolume {
+    /// The extension's defaults: thin, no absorption.
+    fn default() -> Self {
+        GltfVolume {
+            thickness: 0.0,
+            attenuation_distance: f32::INFINITY,
+            attenuation_color: Vec3::ONE,
+        }
+    }
+}
+
+impl GltfVolume {
+    /// Checks the factors against the extension's ranges.
+    fn check(self) -> Result<Self> {
+        let t = self.thickness;
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(Error::param(
+                "gltf thicknessFactor",
+                format!("must be a finite number >= 0, got {t}"),
+            ));
+        }
+        let d = self.attenuation_distance;
+        if d.is_nan() || d <= 0.0 {
+            return Err(Error::param(
+                "gltf attenuationDistance",
+                format!("must be > 0 (absent for no absorption), got {d}"),
+            ));
+        }
+        super::phong::check_rgb01("gltf attenuationColor", self.attenuation_color)?;
+        Ok(self)
+    }
+
+    /// `sigma_a = -ln(color) / distance` per channel (checked factors): 0 for
+    /// an infinite distance, [`f32::MAX`] for a channel of 0 and where the
+    /// quotient overflows.
+    fn sigma_a(&self) -> Vec3 {
+        let d = f64::from(self.attenuation_distance);
+        if d.is_infinite() {
+            return Vec3::ZERO;
+        }
+        let per = |c: f32| {
+            if c == 0.0 {
+                return f32::MAX;
+            }
+            // `+ 0.0` folds the -0.0 of a channel of 1 into 0.0.
+            ((-f64::from(c).ln() / d).min(f64::from(f32::MAX)) + 0.0) as f32
+        };
+        let c = self.attenuation_color;
+        Vec3::new(per(c.x), per(c.y), per(c.z))
+    }
+}
+
+/// Maps glTF `pbrMetallicRoughness` without extensions to a [`Brdf`]: the
+/// opaque mapping of the module docs with the default IOR 1.5.
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] when a base colour channel, `metallic` or
 /// `roughness` is NaN or outside [0, 1].
 pub fn from_gltf_pbr(base_color: Vec3, metallic: f32, roughness: f32) -> Result<Brdf> {
-    let base_color = super::phong::check_rgb01("gltf baseColorFactor", base_color)?;
+    from_gltf_material(&GltfMaterial::new(base_color, metallic, roughness))
+}
+
+/// Maps a glTF material with its transmission, IOR and volume extensions to a
+/// [`Brdf`] (see the module docs).
+///
+/// # Errors
+/// [`Error::InvalidParameter`] naming the factor and its value when
+/// - a base colour channel, `metallic` or `roughness` is NaN or outside [0, 1];
+/// - `transmissionFactor` is NaN or outside [0, 1];
+/// - `ior` is neither 0 nor in [1, 4];
+/// - `thicknessFactor` is negative or not finite, `attenuationDistance` is
+///   not > 0, or an `attenuationColor` channel is outside [0, 1];
+/// - the material transmits partly (`0 < transmissionFactor < 1`) or is a
+///   transmitting metal (`metallic > 0`): neither is modelled.
+pub fn from_gltf_material(m: &GltfMaterial) -> Result<Brdf> {
+    let base_color = super::phong::check_rgb01("gltf baseColorFactor", m.base_color)?;
     for (name, v) in [
-        ("gltf metallicFactor", metallic),
-        ("gltf roughnessFactor", roughness),
+        ("gltf metallicFactor", m.metallic),
+        ("gltf roughnessFactor", m.roughness),
     ] {
         if !(0.0..=1.0).contains(&v) {
             return Err(Error::param(name, format!("must be in [0, 1], got {v}")));
         }
     }
+    let transmission = m.transmission.unwrap_or(0.0);
+    if !(0.0..=1.0).contains(&transmission) {
+        return Err(Error::param(
+            "gltf transmissionFactor",
+            format!("must be in [0, 1], got {transmission}"),
+        ));
+    }
+    let ior = m.ior.unwrap_or(1.5);
+    if !(ior == 0.0 || (1.0..=4.0).contains(&ior)) {
+        return Err(Error::param(
+            "gltf ior",
+            format!(
+                "must be in [1, 4], or 0 (the specular-glossiness compatibility mode), got {ior}"
+            ),
+        ));
+    }
+    let volume = m.volume.unwrap_or_default().check()?;
+    let (metallic, roughness) = (m.metallic, m.roughness);
+    // IOR 0: the Fresnel term is 1, no light enters, nothing is transmitted.
+    if transmission == 0.0 || ior == 0.0 {
+        return opaque(base_color, metallic, roughness, dielectric_f0(ior));
+    }
+    if transmission < 1.0 {
+        return Err(Error::param(
+            "gltf transmissionFactor",
+            format!(
+                "partial transmission is not modelled: got {transmission}, use 0 (opaque) or 1 \
+                 (glass)"
+            ),
+        ));
+    }
+    if metallic > 0.0 {
+        return Err(Error::param(
+            "gltf transmissionFactor",
+            format!(
+                "transmission on a metal is not modelled: transmissionFactor {transmission} with \
+                 metallicFactor {metallic} (glass has metallicFactor 0)"
+            ),
+        ));
+    }
+    let thin = volume.thickness == 0.0;
+    let sigma_a = if thin { Vec3::ZERO } else { volume.sigma_a() };
+    let alpha = roughness * roughness;
+    if alpha < RoughDielectric::MIN_ALPHA {
+        Ok(Dielectric::new(ior, base_color, sigma_a, thin)?.into())
+    } else {
+        Ok(RoughDielectric::new(alpha, ior, base_color, sigma_a, thin)?.into())
+    }
+}
+
+/// The dielectric Fresnel reflectance at normal incidence of IOR `ior`
+/// (checked: 0 or in [1, 4]), computed in f64 so that 1.5 gives exactly
+/// `0.04_f32`; 1 for the IOR 0 of the compatibility mode.
+fn dielectric_f0(ior: f32) -> f32 {
+    if ior == 0.0 {
+        return 1.0;
+    }
+    let r = (f64::from(ior) - 1.0) / (f64::from(ior) + 1.0);
+    (r * r) as f32
+}
+
+/// The opaque mapping of checked factors (module docs), with dielectric
+/// Fresnel reflectance `f0_d`.
+fn opaque(base_color: Vec3, metallic: f32, roughness: f32, f0_d: f32) -> Result<Brdf> {
     let m = roughness * roughness;
     if metallic == 1.0 && m < CookTorrance::MIN_ROUGHNESS {
         return Ok(Mirror::new(base_color)?.into());
     }
-    if metallic == 0.0 && roughness == 1.0 {
+    if metallic == 0.0 && roughness == 1.0 && f0_d <= 0.04 {
         return Ok(Lambert::new(base_color)?.into());
     }
-    let f0 = Vec3::splat(0.04).lerp(base_color, metallic);
+    let f0 = Vec3::splat(f0_d).lerp(base_color, metallic);
     let kd = base_color * (1.0 - metallic);
     Ok(CookTorrance::new(m.max(CookTorrance::MIN_ROUGHNESS), f0, kd)?.into())
 }
@@ -56,6 +268,17 @@ pub fn from_gltf_pbr(base_color: Vec3, metallic: f32, roughness: f32) -> Result<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn glass(roughness: f32) -> GltfMaterial {
+        GltfMaterial {
+            transmission: Some(1.0),
+            ..GltfMaterial::new(Vec3::new(0.9, 0.8, 0.7), 0.0, roughness)
+        }
+    }
+
+    fn message(m: &GltfMaterial) -> String {
+        from_gltf_material(m).unwrap_err().to_string()
+    }
 
     #[test]
     fn special_cases_and_errors() {
@@ -73,5 +296,246 @@ mod tests {
         assert!(from_gltf_pbr(c, f32::NAN, 0.5).is_err());
         assert!(from_gltf_pbr(c, 0.5, 1.5).is_err());
         assert!(from_gltf_pbr(Vec3::splat(-1.0), 0.5, 0.5).is_err());
+    }
+
+    #[test]
+    fn the_default_ior_is_the_old_constant_and_sets_f0() {
+        assert_eq!(dielectric_f0(1.5).to_bits(), 0.04f32.to_bits());
+        let c = Vec3::new(0.8, 0.5, 0.2);
+        let Ok(Brdf::CookTorrance(b)) = from_gltf_pbr(c, 0.0, 0.5) else {
+            panic!("a rough dielectric is cook-torrance")
+        };
+        assert_eq!(b.f0(), Vec3::splat(0.04));
+        // An explicit 1.5 is the absent extension.
+        let explicit = GltfMaterial {
+            ior: Some(1.5),
+            ..GltfMaterial::new(c, 0.0, 0.5)
+        };
+        assert_eq!(from_gltf_material(&explicit).unwrap(), b.into());
+        // IOR 2: f0 = (1/3)^2; no longer Lambert at roughness 1.
+        let ior2 = |roughness| GltfMaterial {
+            ior: Some(2.0),
+            ..GltfMaterial::new(c, 0.0, roughness)
+        };
+        let Ok(Brdf::CookTorrance(b)) = from_gltf_material(&ior2(1.0)) else {
+            panic!("a dielectric of IOR 2 shows its sheen")
+        };
+        assert!((b.f0() - Vec3::splat(1.0 / 9.0)).abs().max_element() < 1e-7);
+        // IOR 1.2 reflects less than 1.5: still Lambert.
+        let low = GltfMaterial {
+            ior: Some(1.2),
+            ..GltfMaterial::new(c, 0.0, 1.0)
+        };
+        assert!(matches!(from_gltf_material(&low), Ok(Brdf::Lambert(_))));
+    }
+
+    #[test]
+    fn ior_zero_is_a_fresnel_of_one_and_nothing_transmits() {
+        for m in [
+            GltfMaterial {
+                ior: Some(0.0),
+                ..GltfMaterial::new(Vec3::splat(0.5), 0.0, 1.0)
+            },
+            GltfMaterial {
+                ior: Some(0.0),
+                ..glass(0.5)
+            },
+        ] {
+            let Ok(Brdf::CookTorrance(b)) = from_gltf_material(&m) else {
+                panic!("{m:?}: a white specular reflector")
+            };
+            assert_eq!(b.f0(), Vec3::ONE, "{m:?}");
+        }
+    }
+
+    #[test]
+    fn full_transmission_is_glass() {
+        let Ok(Brdf::Dielectric(d)) = from_gltf_material(&glass(0.0)) else {
+            panic!("smooth glass is a dielectric")
+        };
+        assert_eq!(d.ior(), 1.5);
+        assert_eq!(d.tint(), Vec3::new(0.9, 0.8, 0.7));
+        assert!(d.thin(), "no volume extension: a thin wall");
+        assert_eq!(d.attenuation(), Vec3::ZERO);
+        // roughness 0.03: alpha 9e-4 < RoughDielectric::MIN_ALPHA, still smooth.
+        assert!(matches!(
+            from_gltf_material(&glass(0.03)),
+            Ok(Brdf::Dielectric(_))
+        ));
+        let Ok(Brdf::RoughDielectric(r)) = from_gltf_material(&glass(0.5)) else {
+            panic!("rough glass is a rough dielectric")
+        };
+        assert_eq!(r.alpha(), 0.25);
+        let ior = GltfMaterial {
+            ior: Some(1.33),
+            ..glass(0.5)
+        };
+        let Ok(Brdf::RoughDielectric(r)) = from_gltf_material(&ior) else {
+            panic!("rough water")
+        };
+        assert_eq!(r.ior(), 1.33);
+        // An explicit 0 is opaque, like the absent extension.
+        let none = GltfMaterial {
+            transmission: Some(0.0),
+            ..glass(1.0)
+        };
+        assert!(matches!(from_gltf_material(&none), Ok(Brdf::Lambert(_))));
+    }
+
+    #[test]
+    fn volume_sets_thin_and_absorption() {
+        let with = |v: GltfVolume| GltfMaterial {
+            volume: Some(v),
+            ..glass(0.0)
+        };
+        let thick = GltfVolume {
+            thickness: 2.0,
+            ..GltfVolume::default()
+        };
+        let Ok(Brdf::Dielectric(d)) = from_gltf_material(&with(thick)) else {
+            panic!("a volume of glass")
+        };
+        assert!(!d.thin());
+        assert_eq!(d.attenuation(), Vec3::ZERO, "no attenuationDistance");
+        let absorbing = GltfVolume {
+            attenuation_distance: 10.0,
+            attenuation_color: Vec3::new(0.5, 1.0, 0.0),
+            ..thick
+        };
+        let Ok(Brdf::Dielectric(d)) = from_gltf_material(&with(absorbing)) else {
+            panic!("absorbing glass")
+        };
+        let s = d.attenuation();
+        assert!((s.x - std::f32::consts::LN_2 / 10.0).abs() < 1e-7, "{s}");
+        assert_eq!(s.y.to_bits(), 0.0f32.to_bits());
+        assert_eq!(s.z, f32::MAX);
+        // A thin wall has no interior: the attenuation has no effect.
+        let thin = GltfVolume {
+            thickness: 0.0,
+            ..absorbing
+        };
+        let Ok(Brdf::Dielectric(d)) = from_gltf_material(&with(thin)) else {
+            panic!("a thin wall")
+        };
+        assert!(d.thin());
+        assert_eq!(d.attenuation(), Vec3::ZERO);
+        // A tiny distance overflows to f32::MAX, not infinity.
+        let tiny = GltfVolume {
+            attenuation_distance: 1e-40,
+            ..absorbing
+        };
+        let Ok(Brdf::Dielectric(d)) = from_gltf_material(&with(tiny)) else {
+            panic!("dense glass")
+        };
+        assert_eq!(d.attenuation().x, f32::MAX);
+    }
+
+    #[test]
+    fn bad_factors_are_refused_by_name_and_value() {
+        let cases: [(GltfMaterial, &[&str]); 11] = [
+            (
+                GltfMaterial {
+                    transmission: Some(1.5),
+                    ..glass(0.0)
+                },
+                &["transmissionFactor", "1.5"],
+            ),
+            (
+                GltfMaterial {
+                    transmission: Some(f32::NAN),
+                    ..glass(0.0)
+                },
+                &["transmissionFactor", "NaN"],
+            ),
+            (
+                GltfMaterial {
+                    transmission: Some(0.5),
+                    ..glass(0.0)
+                },
+                &["partial transmission is not modelled", "0.5"],
+            ),
+            (
+                GltfMaterial {
+                    metallic: 0.25,
+                    ..glass(0.0)
+                },
+                &["transmission on a metal is not modelled", "0.25"],
+            ),
+            (
+                GltfMaterial {
+                    metallic: 1.0,
+                    ..glass(0.0)
+                },
+                &["transmission on a metal"],
+            ),
+            (
+                GltfMaterial {
+                    ior: Some(0.5),
+                    ..glass(0.0)
+                },
+                &["`gltf ior`", "0.5"],
+            ),
+            (
+                GltfMaterial {
+                    ior: Some(4.5),
+                    ..GltfMaterial::new(Vec3::ONE, 0.0, 1.0)
+                },
+                &["`gltf ior`", "4.5"],
+            ),
+            (
+                GltfMaterial {
+                    ior: Some(f32::NAN),
+                    ..glass(0.0)
+                },
+                &["`gltf ior`", "NaN"],
+            ),
+            (
+                GltfMaterial {
+                    volume: Some(GltfVolume {
+                        thickness: -1.0,
+                        ..GltfVolume::default()
+                    }),
+                    ..glass(0.0)
+                },
+                &["thicknessFactor", "-1"],
+            ),
+            (
+                GltfMaterial {
+                    volume: Some(GltfVolume {
+                        thickness: 1.0,
+                        attenuation_distance: 0.0,
+                        ..GltfVolume::default()
+                    }),
+                    ..glass(0.0)
+                },
+                &["attenuationDistance", "got 0"],
+            ),
+            (
+                GltfMaterial {
+                    volume: Some(GltfVolume {
+                        thickness: 1.0,
+                        attenuation_color: Vec3::new(1.0, 2.0, 1.0),
+                        ..GltfVolume::default()
+                    }),
+                    ..glass(0.0)
+                },
+                &["attenuationColor", "2"],
+            ),
+        ];
+        for (m, words) in cases {
+            let msg = message(&m);
+            for w in words {
+                assert!(msg.contains(w), "{m:?}: {msg}");
+            }
+        }
+        // Volume factors are checked on an opaque material too.
+        let opaque = GltfMaterial {
+            volume: Some(GltfVolume {
+                attenuation_distance: f32::NAN,
+                ..GltfVolume::default()
+            }),
+            ..GltfMaterial::new(Vec3::ONE, 0.0, 1.0)
+        };
+        assert!(message(&opaque).contains("attenuationDistance"));
     }
 }

@@ -1,24 +1,35 @@
 //! Reflection models: a closed set, dispatched by `match` (no trait objects, so
 //! work queues hold plain `Copy` values). One file per model:
 //! [`Lambert`], [`Phong`] (modified Phong), [`CookTorrance`] (Beckmann,
-//! Schlick, V-cavity), [`Mirror`] (delta); [`from_gltf_pbr`] maps glTF
-//! metallic-roughness materials onto them.
+//! Schlick, V-cavity), [`Mirror`] (delta), and two transmitting models,
+//! [`Dielectric`] (smooth glass, delta) and [`RoughDielectric`] (GGX glass,
+//! Walter et al. 2007); [`from_gltf_pbr`] maps glTF metallic-roughness
+//! materials onto them.
 //!
 //! All directions are in the local shading frame (normal = +z) and point away
 //! from the surface: `wi` towards where the light came from, `wo` towards where
-//! it leaves.
+//! it leaves. The reflecting models are reciprocal and live on the side the
+//! light arrives from (callers flip the normal towards it). The transmitting
+//! ones are not: their frame's +z is the outside of the object (the winding
+//! side, index 1), `wi.z < 0` is a direction inside, and what a transmitted
+//! sample carries depends on the [`Transport`] mode (flux does not scale
+//! across an interface, radiance scales by the square of the index ratio).
 
 pub mod cook_torrance;
+pub mod dielectric;
 pub mod gltf_map;
 pub mod lambert;
 pub mod mirror;
 pub mod phong;
+pub mod rough_dielectric;
 
 pub use cook_torrance::CookTorrance;
-pub use gltf_map::from_gltf_pbr;
+pub use dielectric::{Dielectric, Transport};
+pub use gltf_map::{from_gltf_material, from_gltf_pbr, GltfMaterial, GltfVolume};
 pub use lambert::Lambert;
 pub use mirror::Mirror;
 pub use phong::Phong;
+pub use rough_dielectric::RoughDielectric;
 
 use crate::rng::hash2;
 use glam::Vec3;
@@ -63,6 +74,10 @@ pub enum Brdf {
     CookTorrance(CookTorrance),
     /// Perfect mirror (delta).
     Mirror(Mirror),
+    /// Smooth glass: Fresnel reflection and Snell refraction (delta).
+    Dielectric(Dielectric),
+    /// Rough glass: GGX microfacet reflection and transmission.
+    RoughDielectric(RoughDielectric),
 }
 
 macro_rules! dispatch {
@@ -72,20 +87,49 @@ macro_rules! dispatch {
             Brdf::Phong($b) => $e,
             Brdf::CookTorrance($b) => $e,
             Brdf::Mirror($b) => $e,
+            Brdf::Dielectric($b) => $e,
+            Brdf::RoughDielectric($b) => $e,
         }
     };
 }
 
 impl Brdf {
-    /// `f_r(wi, wo)` per RGB channel (sr^-1); 0 below the horizon.
+    /// `f(wi, wo)` per RGB channel (sr^-1) for photons ([`Transport::Flux`]);
+    /// 0 below the horizon of a reflecting model.
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
-        dispatch!(self, b => b.eval(wi, wo))
+        self.eval_in(wi, wo, Transport::Flux)
     }
 
-    /// Importance-samples `wo` for a given `wi`.
+    /// `f(wi, wo)` in a transport mode: the reflecting models ignore it; the
+    /// transmitting ones scale radiance across an interface.
+    pub fn eval_in(&self, wi: Vec3, wo: Vec3, mode: Transport) -> Vec3 {
+        match self {
+            Brdf::Lambert(b) => b.eval(wi, wo),
+            Brdf::Phong(b) => b.eval(wi, wo),
+            Brdf::CookTorrance(b) => b.eval(wi, wo),
+            Brdf::Mirror(b) => b.eval(wi, wo),
+            Brdf::Dielectric(b) => b.eval(wi, wo, mode),
+            Brdf::RoughDielectric(b) => b.eval(wi, wo, mode),
+        }
+    }
+
+    /// Importance-samples `wo` for a given `wi`, for photons ([`Transport::Flux`]).
     #[inline]
     pub fn sample(&self, wi: Vec3, u: [f32; 2]) -> Option<BrdfSample> {
-        dispatch!(self, b => b.sample(wi, u))
+        self.sample_in(wi, u, Transport::Flux)
+    }
+
+    /// Importance-samples `wo` for a given `wi` in a transport mode.
+    #[inline]
+    pub fn sample_in(&self, wi: Vec3, u: [f32; 2], mode: Transport) -> Option<BrdfSample> {
+        match self {
+            Brdf::Lambert(b) => b.sample(wi, u),
+            Brdf::Phong(b) => b.sample(wi, u),
+            Brdf::CookTorrance(b) => b.sample(wi, u),
+            Brdf::Mirror(b) => b.sample(wi, u),
+            Brdf::Dielectric(b) => b.sample(wi, u, mode),
+            Brdf::RoughDielectric(b) => b.sample(wi, u, mode),
+        }
     }
 
     /// Solid-angle pdf of [`Brdf::sample`].
@@ -93,43 +137,90 @@ impl Brdf {
         dispatch!(self, b => b.pdf(wi, wo))
     }
 
-    /// Directional albedo `integral f_r(wi, wo) cos(theta_o) dwo` per channel.
+    /// Directional albedo `integral f(wi, wo) |cos(theta_o)| dwo` per channel
+    /// (over the whole sphere for a transmitting model).
     pub fn albedo(&self, wi: Vec3) -> Vec3 {
         dispatch!(self, b => b.albedo(wi))
     }
 
     /// True when the whole model is a delta distribution (no photon is stored on it).
     pub fn is_delta(&self) -> bool {
-        matches!(self, Brdf::Mirror(_))
+        match self {
+            Brdf::Mirror(_) | Brdf::Dielectric(_) => true,
+            // Index-matched rough glass is a pass-through.
+            Brdf::RoughDielectric(b) => b.is_delta(),
+            _ => false,
+        }
     }
 
-    /// A short name of the model (`lambert`, `phong`, `cook-torrance`, `mirror`).
+    /// True for the models that transmit (their frame is the object's
+    /// outside, not the arrival side).
+    pub fn is_transmissive(&self) -> bool {
+        matches!(self, Brdf::Dielectric(_) | Brdf::RoughDielectric(_))
+    }
+
+    /// True for a surface that light passes along rather than rests on: a
+    /// delta model or a transmitting one. Photons are not stored on it, a
+    /// camera path samples its way through it, and a photon whose every
+    /// bounce since the light was on such surfaces is a caustic photon.
+    pub fn is_specular(&self) -> bool {
+        self.is_delta() || self.is_transmissive()
+    }
+
+    /// The absorption coefficient inside a refracting (not thin-walled)
+    /// transmitting model, per world unit and channel, when it absorbs.
+    pub fn interior_attenuation(&self) -> Option<Vec3> {
+        let (sigma, thin) = match self {
+            Brdf::Dielectric(b) => (b.attenuation(), b.thin()),
+            Brdf::RoughDielectric(b) => (b.attenuation(), b.thin()),
+            _ => return None,
+        };
+        (!thin && sigma.max_element() > 0.0).then_some(sigma)
+    }
+
+    /// A short name of the model (`lambert`, `phong`, `cook-torrance`,
+    /// `mirror`, `dielectric`, `rough-dielectric`).
     pub fn kind(&self) -> &'static str {
         match self {
             Brdf::Lambert(_) => "lambert",
             Brdf::Phong(_) => "phong",
             Brdf::CookTorrance(_) => "cook-torrance",
             Brdf::Mirror(_) => "mirror",
+            Brdf::Dielectric(_) => "dielectric",
+            Brdf::RoughDielectric(_) => "rough-dielectric",
         }
     }
 
     /// The model's tag and the exact bits of its parameters (-0.0 folded
     /// into 0.0): equal models, and only they, have equal values. The
     /// analysis cache is keyed by it.
-    pub fn param_bits(&self) -> (u8, [u32; 7]) {
-        let (tag, params): (u8, [f32; 7]) = match self {
-            Brdf::Lambert(b) => (1, [b.albedo.x, b.albedo.y, b.albedo.z, 0.0, 0.0, 0.0, 0.0]),
+    pub fn param_bits(&self) -> (u8, [u32; 9]) {
+        let (tag, params): (u8, [f32; 9]) = match self {
+            Brdf::Lambert(b) => {
+                let a = b.albedo;
+                (1, [a.x, a.y, a.z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+            }
             Brdf::Phong(b) => {
                 let (d, s) = (b.kd(), b.ks());
-                (2, [d.x, d.y, d.z, s.x, s.y, s.z, b.exponent()])
+                (2, [d.x, d.y, d.z, s.x, s.y, s.z, b.exponent(), 0.0, 0.0])
             }
             Brdf::CookTorrance(b) => {
                 let (d, f) = (b.kd(), b.f0());
-                (3, [d.x, d.y, d.z, f.x, f.y, f.z, b.roughness()])
+                (3, [d.x, d.y, d.z, f.x, f.y, f.z, b.roughness(), 0.0, 0.0])
             }
             Brdf::Mirror(b) => {
                 let r = b.reflectance();
-                (4, [r.x, r.y, r.z, 0.0, 0.0, 0.0, 0.0])
+                (4, [r.x, r.y, r.z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+            }
+            Brdf::Dielectric(b) => {
+                let (t, a) = (b.tint(), b.attenuation());
+                let thin = f32::from(u8::from(b.thin()));
+                (5, [t.x, t.y, t.z, a.x, a.y, a.z, b.ior(), thin, 0.0])
+            }
+            Brdf::RoughDielectric(b) => {
+                let (t, a) = (b.tint(), b.attenuation());
+                let thin = f32::from(u8::from(b.thin()));
+                (6, [t.x, t.y, t.z, a.x, a.y, a.z, b.ior(), thin, b.alpha()])
             }
         };
         // +0.0 folds -0.0 into 0.0 so equal values give equal bits.
@@ -163,5 +254,15 @@ impl From<CookTorrance> for Brdf {
 impl From<Mirror> for Brdf {
     fn from(b: Mirror) -> Self {
         Brdf::Mirror(b)
+    }
+}
+impl From<Dielectric> for Brdf {
+    fn from(b: Dielectric) -> Self {
+        Brdf::Dielectric(b)
+    }
+}
+impl From<RoughDielectric> for Brdf {
+    fn from(b: RoughDielectric) -> Self {
+        Brdf::RoughDielectric(b)
     }
 }

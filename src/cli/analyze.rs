@@ -19,7 +19,8 @@ use glam::Vec3;
 /// Arguments of `analyze`.
 #[derive(clap::Args, Debug)]
 pub struct AnalyzeArgs {
-    /// A scene (glTF path or `cornell`) whose emitters and BRDFs to analyse.
+    /// A scene (glTF path, or a built-in: `cornell`, `cornell-empty`,
+    /// `cornell-glass`) whose emitters and BRDFs to analyse.
     pub scene: Option<String>,
     /// `cos^n` emitters to analyse, by exponent.
     #[arg(long, value_delimiter = ',')]

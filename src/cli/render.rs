@@ -18,7 +18,9 @@ use std::time::Instant;
 /// Arguments of `render`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// A glTF file (.gltf or .glb), or `cornell` for the built-in Cornell box.
+    /// A glTF file (.gltf or .glb), or a built-in scene: `cornell` (the Cornell
+    /// box), `cornell-empty` (without its blocks), `cornell-glass` (with a mirror
+    /// and a glass sphere instead).
     pub scene: String,
     /// classic (Markov chains), density (density control) or adaptive (the paper).
     #[arg(long, default_value = "adaptive")]
@@ -53,6 +55,13 @@ pub struct RenderArgs {
     /// Photons per radiance estimate.
     #[arg(long, default_value_t = DEFAULT_K)]
     pub k: usize,
+    /// Caustic photons per caustic estimate (the caustic map's own kernel).
+    #[arg(long, default_value_t = adaptive_pm::render::DEFAULT_CAUSTIC_K)]
+    pub caustic_k: usize,
+    /// Largest caustic kernel radius in scene units (default: a quarter of
+    /// the other estimates' largest radius).
+    #[arg(long)]
+    pub caustic_radius: Option<f32>,
     /// Linear radiance, OpenEXR.
     #[arg(long)]
     pub out: PathBuf,
@@ -101,6 +110,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     cfg.light_samples = args.light_samples;
     cfg.cache_stride = args.cache_stride;
     cfg.k = args.k;
+    cfg.caustic_k = args.caustic_k;
+    cfg.caustic_max_radius = args.caustic_radius;
     cfg.view = view;
     cfg.seed = args.budget.seed;
     cfg.rows = args

@@ -8,7 +8,9 @@ use serde_json::json;
 /// Arguments of `scene`.
 #[derive(clap::Args, Debug)]
 pub struct SceneArgs {
-    /// A glTF file (.gltf or .glb), or `cornell` for the built-in Cornell box.
+    /// A glTF file (.gltf or .glb), or a built-in scene: `cornell` (the Cornell
+    /// box), `cornell-empty` (without its blocks), `cornell-glass` (with a mirror
+    /// and a glass sphere instead).
     pub scene: String,
     /// Print one JSON object instead of text.
     #[arg(long)]

@@ -10,7 +10,9 @@ use serde_json::json;
 /// Arguments of `trace`.
 #[derive(clap::Args, Debug)]
 pub struct TraceArgs {
-    /// A glTF file (.gltf or .glb), or `cornell` for the built-in Cornell box.
+    /// A glTF file (.gltf or .glb), or a built-in scene: `cornell` (the Cornell
+    /// box), `cornell-empty` (without its blocks), `cornell-glass` (with a mirror
+    /// and a glass sphere instead).
     pub scene: String,
     /// classic (Markov chains), density (density control) or adaptive (the paper).
     #[arg(long, default_value = "adaptive")]

@@ -8,9 +8,12 @@
 //! - the photon is stored with probability 1 when that density is below the
 //!   target and 0 above it;
 //! - a rejected photon's power is split equally among the `k` nearest of
-//!   those neighbours **of its own bounce depth** (fewer when fewer lie within
-//!   the radius; when none does, the photon is stored after all). Power then
-//!   never moves between depths: every depth's total power is kept exactly,
+//!   those neighbours **of its own bounce depth and kind** (caustic or not;
+//!   fewer when fewer lie within the radius; when none does, or when a
+//!   share would lift a neighbour above the largest power the map's frame
+//!   encodes, the photon is stored after all: a caustic focuses thousands of
+//!   photons on a few). Power then never moves between depths nor between
+//!   the caustic and the indirect maps: every depth's total power is kept exactly,
 //!   and the depth >= 1 map that the renderer reads for indirect light stays
 //!   unbiased in power (docs/method.md, "Density control"). Redistributing
 //!   to neighbours of any depth (Suykens' single map) moved direct-light
@@ -42,6 +45,7 @@ struct Entry {
     direction: Vec3,
     index: u32,
     depth: u8,
+    caustic: bool,
 }
 
 const EMPTY: u64 = u64::MAX;
@@ -56,9 +60,11 @@ pub(super) struct DensityControl {
     slots: Vec<u32>,
     cells: Vec<Vec<Entry>>,
     records: Vec<PhotonRecord>,
-    /// Same-side photons within the radius: (distance^2, index, depth).
-    candidates: Vec<(f32, u32, u8)>,
+    /// Same-side photons within the radius: (distance^2, index, depth, caustic).
+    candidates: Vec<(f32, u32, u8, bool)>,
     rejected: u64,
+    /// The largest power channel a stored photon may reach.
+    power_cap: f32,
 }
 
 impl DensityControl {
@@ -86,7 +92,15 @@ impl DensityControl {
             records: Vec::new(),
             candidates: Vec::new(),
             rejected: 0,
+            power_cap: f32::INFINITY,
         })
+    }
+
+    /// Caps the power channel a redistribution may give a stored photon:
+    /// the largest the map's frame encodes (above it the power would be
+    /// clamped, and lost).
+    pub fn with_power_cap(self, power_cap: f32) -> Self {
+        DensityControl { power_cap, ..self }
     }
 
     fn cell_of(&self, p: Vec3) -> [i64; 3] {
@@ -126,6 +140,7 @@ impl DensityControl {
             direction: rec.direction,
             index,
             depth: rec.depth,
+            caustic: rec.caustic,
         });
         self.records.push(*rec);
     }
@@ -165,15 +180,17 @@ impl DensityControl {
                         for e in &self.cells[self.slots[s] as usize] {
                             let d2 = (e.position - rec.position).length_squared();
                             if d2 <= self.radius2 && e.direction.dot(n) < 0.0 {
-                                self.candidates.push((d2, e.index, e.depth));
+                                self.candidates.push((d2, e.index, e.depth, e.caustic));
                             }
                         }
                     }
                 }
             }
             if self.candidates.len() >= self.k {
-                // Dense enough: hand the power to the nearest of the same depth.
-                self.candidates.retain(|c| c.2 == rec.depth);
+                // Dense enough: hand the power to the nearest of the same
+                // depth and kind.
+                self.candidates
+                    .retain(|c| c.2 == rec.depth && c.3 == rec.caustic);
                 let m = self.candidates.len().min(self.k);
                 if m == 0 {
                     self.insert(rec);
@@ -183,7 +200,15 @@ impl DensityControl {
                 self.candidates
                     .select_nth_unstable_by(m - 1, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 let share = rec.power / m as f32;
-                for &(_, i, _) in &self.candidates[..m] {
+                let cap = self.power_cap;
+                let fits = self.candidates[..m].iter().all(|&(_, i, ..)| {
+                    (self.records[i as usize].power + share).max_element() <= cap
+                });
+                if !fits {
+                    self.insert(rec);
+                    continue;
+                }
+                for &(_, i, ..) in &self.candidates[..m] {
                     self.records[i as usize].power += share;
                 }
                 self.rejected += 1;
@@ -220,6 +245,7 @@ mod tests {
                 power: Vec3::splat(1.0 + (i % 7) as f32),
                 direction: -Vec3::Y,
                 depth: (i % 4) as u8,
+                caustic: false,
             })
             .collect();
         let normals = vec![Vec3::Y; records.len()];
@@ -278,6 +304,7 @@ mod tests {
                 power: Vec3::splat(1.0 + (i % 5) as f32),
                 direction: -n,
                 depth: (i % 3) as u8,
+                caustic: false,
             });
             normals.push(n);
         }

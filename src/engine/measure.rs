@@ -29,18 +29,24 @@ pub struct Maps {
     pub full: PhotonMap,
     /// Photons stored at their first hit only (the paper's primary map).
     pub primary: PhotonMap,
-    /// Photons stored at depth >= 1 (the renderer's indirect light at a first hit).
+    /// Photons stored at depth >= 1 that are not caustic photons (the
+    /// renderer's indirect light at a first hit, without a gather).
     pub indirect: PhotonMap,
+    /// Caustic photons (`L S+ D`: through mirrors and glass only), read at
+    /// a camera path's first non-specular hit with their own kernel.
+    pub caustic: PhotonMap,
     /// Seconds to build `full`.
     pub build_s: f64,
     /// Seconds to build `primary`.
     pub build_primary_s: f64,
     /// Seconds to build `indirect`.
     pub build_indirect_s: f64,
+    /// Seconds to build `caustic`.
+    pub build_caustic_s: f64,
 }
 
 impl Maps {
-    /// Builds the three kd-trees.
+    /// Builds the four kd-trees.
     pub fn build(records: &[PhotonRecord]) -> Self {
         let timed = |keep: fn(&PhotonRecord) -> bool| {
             let t = Instant::now();
@@ -49,69 +55,86 @@ impl Maps {
         };
         let (full, build_s) = timed(|_| true);
         let (primary, build_primary_s) = timed(|r| r.depth == 0);
-        let (indirect, build_indirect_s) = timed(|r| r.depth >= 1);
+        let (indirect, build_indirect_s) = timed(|r| r.depth >= 1 && !r.caustic);
+        let (caustic, build_caustic_s) = timed(|r| r.caustic);
         Maps {
             full,
             primary,
             indirect,
+            caustic,
             build_s,
             build_primary_s,
             build_indirect_s,
+            build_caustic_s,
         }
     }
 
-    /// Seconds to build all three maps.
+    /// Seconds to build all the maps.
     pub fn build_total_s(&self) -> f64 {
-        self.build_s + self.build_primary_s + self.build_indirect_s
+        self.build_s + self.build_primary_s + self.build_indirect_s + self.build_caustic_s
     }
 }
 
+/// The map of the photons of `photons` that `keep` selects (copied), and
+/// the seconds it took.
+fn subset(
+    photons: &[CompactPhoton],
+    frame: Quantizer,
+    keep: fn(&CompactPhoton) -> bool,
+) -> (PhotonMap, f64) {
+    let t = Instant::now();
+    let part: Vec<CompactPhoton> = photons
+        .par_iter()
+        .with_min_len(4096)
+        .filter(|p| keep(p))
+        .copied()
+        .collect();
+    (
+        PhotonMap::from_compact(part, frame),
+        t.elapsed().as_secs_f64(),
+    )
+}
+
 impl Maps {
-    /// The three kd-trees from a trace's compact photons, without decoding
-    /// them: the full map is built in place over `photons`, the primary and
-    /// indirect maps over copies of their photons.
+    /// The four kd-trees from a trace's compact photons, without decoding
+    /// them: the full map is built in place over `photons`, the others over
+    /// copies of their photons.
     pub fn from_photons(photons: Vec<CompactPhoton>, frame: Quantizer) -> Self {
-        let subset = |keep: fn(u8) -> bool| {
-            let t = Instant::now();
-            let part: Vec<CompactPhoton> = photons
-                .par_iter()
-                .with_min_len(4096)
-                .filter(|p| keep(p.depth()))
-                .copied()
-                .collect();
-            (
-                PhotonMap::from_compact(part, frame),
-                t.elapsed().as_secs_f64(),
-            )
-        };
-        let (primary, build_primary_s) = subset(|d| d == 0);
-        let (indirect, build_indirect_s) = subset(|d| d >= 1);
+        let (primary, build_primary_s) = subset(&photons, frame, |p| p.depth() == 0);
+        let (indirect, build_indirect_s) =
+            subset(&photons, frame, |p| p.depth() >= 1 && !p.is_caustic());
+        let (caustic, build_caustic_s) = subset(&photons, frame, CompactPhoton::is_caustic);
         let t = Instant::now();
         let full = PhotonMap::from_compact(photons, frame);
         Maps {
             full,
             primary,
             indirect,
+            caustic,
             build_s: t.elapsed().as_secs_f64(),
             build_primary_s,
             build_indirect_s,
+            build_caustic_s,
         }
     }
 
-    /// The full map alone, built in place over `photons`; the primary and
-    /// indirect maps are left empty. For a render that reads only the full
-    /// map (the default gather through the irradiance cache): at 1e6
-    /// photons it saves two of the three builds.
+    /// The full map and the caustic map, the full one built in place over
+    /// `photons`; the primary and indirect maps are left empty. For a render
+    /// that reads only those two (the default gather through the irradiance
+    /// cache): at 1e6 photons it saves two of the builds.
     pub fn full_only(photons: Vec<CompactPhoton>, frame: Quantizer) -> Self {
+        let (caustic, build_caustic_s) = subset(&photons, frame, CompactPhoton::is_caustic);
         let t = Instant::now();
         let full = PhotonMap::from_compact(photons, frame);
         Maps {
             full,
             primary: PhotonMap::from_compact(Vec::new(), frame),
             indirect: PhotonMap::from_compact(Vec::new(), frame),
+            caustic,
             build_s: t.elapsed().as_secs_f64(),
             build_primary_s: 0.0,
             build_indirect_s: 0.0,
+            build_caustic_s,
         }
     }
 

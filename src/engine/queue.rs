@@ -68,6 +68,7 @@ mod tests {
             direction: Vec3::Z,
             power: Vec3::ONE,
             key,
+            specular_chain: true,
         }
     }
 

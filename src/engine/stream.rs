@@ -129,6 +129,7 @@ fn emit(
                     direction: e.direction,
                     power: power * e.weight,
                     key,
+                    specular_chain: true,
                 }
             }));
         }

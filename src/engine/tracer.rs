@@ -270,11 +270,10 @@ impl<C: RayCaster> Tracer<C> {
                         n_max as f64 / scene.surface_sampler().total_area().max(f64::MIN_POSITIVE)
                     }
                 };
-                Some(DensityControl::new(
-                    scene.bounds(),
-                    target,
-                    DENSITY_CONTROL_K,
-                )?)
+                Some(
+                    DensityControl::new(scene.bounds(), target, DENSITY_CONTROL_K)?
+                        .with_power_cap(frame.power_scale() as f32),
+                )
             }
             _ => None,
         };

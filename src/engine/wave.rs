@@ -16,7 +16,7 @@ use crate::photon_map::{CompactPhoton, PhotonRecord, Quantizer};
 use crate::raycast::{Hit, Ray, RayCaster};
 use crate::rng::{hash2, Rng};
 use crate::sampling::{luminance, Frame};
-use crate::scene::Scene;
+use crate::scene::{consistent_with_geometry, Scene};
 use glam::Vec3;
 use std::sync::Arc;
 
@@ -31,6 +31,10 @@ pub struct PathState {
     pub power: Vec3,
     /// Identity: seeds every random number this photon draws.
     pub key: u64,
+    /// Every bounce since the light was on a specular surface (true at the
+    /// light): a photon stored while this holds, after a bounce, is a
+    /// caustic photon.
+    pub specular_chain: bool,
 }
 
 /// What shading needs to know about the run.
@@ -133,12 +137,6 @@ fn shade_hit<C>(
 ) {
     out.hits += 1;
     let position = p.origin + p.direction * h.t;
-    // Surfaces are two-sided: shade on the side the photon arrives from.
-    let n = if h.ng.dot(p.direction) > 0.0 {
-        -h.ng
-    } else {
-        h.ng
-    };
     let material = h.material as usize;
     // A caster of the user's may report any index: an unknown one ends the
     // run with an error (see the tracer), never a panic.
@@ -146,17 +144,27 @@ fn shade_hit<C>(
         out.bad_material.get_or_insert(h.material);
         return;
     };
-    if !brdf.is_delta() {
+    let from_inside = h.ng.dot(p.direction) > 0.0;
+    let mut power = p.power;
+    if from_inside {
+        // The segment just travelled lay inside this (closed) object.
+        if let Some(sigma) = brdf.interior_attenuation() {
+            power *= (-sigma * h.t).exp();
+        }
+    }
+    if !brdf.is_specular() {
         let record = PhotonRecord {
             position,
-            power: p.power,
+            power,
             direction: p.direction,
             depth: ctx.depth,
+            caustic: p.specular_chain && ctx.depth > 0,
         };
         if ctx.keep_records {
             out.records.push(record);
-            out.normals.push(n);
-        } else if position.is_finite() && p.power.is_finite() {
+            // Surfaces are two-sided: the normal on the side the photon arrives from.
+            out.normals.push(if from_inside { -h.ng } else { h.ng });
+        } else if position.is_finite() && power.is_finite() {
             // At most one store per photon of the batch: a slot is free.
             slots[out.stored] = ctx.frame.encode(&record);
             out.stored += 1;
@@ -165,17 +173,19 @@ fn shade_hit<C>(
     if !ctx.continue_paths {
         return;
     }
+    let n = ctx.scene.scattering_normal(brdf, h, from_inside);
     let frame = Frame::from_normal(n);
     let wi = frame.local_from_world(-p.direction);
-    // The classic survival probability: the largest channel of the albedo.
-    let r = ctx.albedo[material].at(wi.z).max_element().min(1.0) as f64;
+    // The classic survival probability: the largest channel of the albedo
+    // (tabulated from the outside for glass: any value in (0, 1] is unbiased).
+    let r = ctx.albedo[material].at(wi.z.abs()).max_element().min(1.0) as f64;
     if r <= 0.0 {
         return;
     }
     let s = if ctx.n_max_refl > 0.0 {
-        let alpha_e = luminance(p.power) / ctx.max_light_luminance;
+        let alpha_e = luminance(power) / ctx.max_light_luminance;
         let alpha_d = match &ctx.tables[material] {
-            Some(t) => t.alpha_d(wi.z),
+            Some(t) => t.alpha_d(wi.z.abs()),
             None => ctx.alpha_min,
         };
         alpha_e as f64 * alpha_d as f64 * ctx.n_max_refl
@@ -188,20 +198,36 @@ fn shade_hit<C>(
     let mut rng = Rng::new(p.key ^ 0x5E1E_C7ED_0000_0000);
     let k = round_stochastic(m, rng.next_f32());
     let scale = (1.0 / m) as f32;
+    let specular = brdf.is_specular();
+    let specular_chain = p.specular_chain && specular;
     for c in 0..k {
         let key = hash2(p.key, c as u64 + 1);
         let Some(bs) = brdf.sample(wi, rng.next_2d()) else {
             continue;
         };
-        let power = p.power * bs.weight * scale;
-        if !power.is_finite() || power.max_element() <= 0.0 {
+        let child_power = power * bs.weight * scale;
+        if !child_power.is_finite() || child_power.max_element() <= 0.0 {
             continue;
         }
+        let direction = frame.world_from_local(bs.wo).normalize();
+        if specular
+            && !consistent_with_geometry(h.ng, -p.direction, direction, bs.wo.z * wi.z < 0.0)
+        {
+            continue;
+        }
+        // Off the surface on the side the child leaves by (the geometric
+        // side: a shading normal may disagree with it).
+        let side = if direction.dot(h.ng) < 0.0 {
+            -h.ng
+        } else {
+            h.ng
+        };
         out.children.push(PathState {
-            origin: position + n * ctx.epsilon,
-            direction: frame.world_from_local(bs.wo).normalize(),
-            power,
+            origin: position + side * ctx.epsilon,
+            direction,
+            power: child_power,
             key,
+            specular_chain,
         });
     }
 }

@@ -179,6 +179,7 @@ mod tests {
                     power: glam::Vec3::ONE,
                     direction: glam::Vec3::Z,
                     depth: 0,
+                    caustic: false,
                 })
             })
             .collect();

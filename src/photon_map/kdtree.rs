@@ -377,6 +377,7 @@ mod tests {
                 power: Vec3::splat(rng.next_f32()),
                 direction: Vec3::Z,
                 depth: (i % 4) as u8,
+                caustic: false,
             })
             .collect();
         let map = PhotonMap::build(&records);

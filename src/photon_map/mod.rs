@@ -10,7 +10,8 @@
 //! record the map was built from. A [`GrowingMap`] index is the insertion index.
 //!
 //! Primary photons only: build a second map with
-//! `PhotonMap::build_filtered(&records, |r| r.depth == 0)`.
+//! `PhotonMap::build_filtered(&records, |r| r.depth == 0)`; caustic photons
+//! only, with `|r| r.caustic`.
 
 use glam::Vec3;
 
@@ -40,6 +41,9 @@ pub struct PhotonRecord {
     pub direction: Vec3,
     /// Bounce depth: 0 when stored at its first hit after leaving the light.
     pub depth: u8,
+    /// A caustic photon (`L S+ D`): every bounce since the light was on a
+    /// specular surface (a mirror or glass), and there was at least one.
+    pub caustic: bool,
 }
 
 /// One query result.

@@ -2,7 +2,7 @@
 //!
 //! | word | bits | content |
 //! |------|------|---------|
-//! | `pos: u64` | 3 × 21 (+1 unused) | position, quantised on a uniform grid over the map's bounds |
+//! | `pos: u64` | 3 × 21 + 1 | position, quantised on a uniform grid over the map's bounds; the top bit marks a caustic photon |
 //! | `power: u32` | 3 × 9 + 5 | RGB power, shared exponent, relative to the map's largest channel |
 //! | `dir: u32` | 2 × 12 + 6 + 2 | octahedral direction of travel, bounce depth, kd-tree split axis |
 //!
@@ -23,6 +23,9 @@
 //!   octahedron's smallest radius is `1/sqrt(3)`), so the angular error is at most
 //!   `sqrt(4.5) h` = 1.04e-3 rad = 0.059° ([`MAX_DIRECTION_ERROR`]).
 //! - **Depth**: 6 bits; depths above [`MAX_DEPTH`] are stored as `MAX_DEPTH`.
+//! - **Caustic**: bit 63 of `pos` (above the three coordinates, so every
+//!   masked coordinate read ignores it; files written before it existed
+//!   have it clear).
 
 use super::PhotonRecord;
 use glam::Vec3;
@@ -32,6 +35,8 @@ pub const POSITION_BITS: u32 = 21;
 /// Largest quantised position coordinate.
 pub(crate) const POSITION_MAX: u32 = (1 << POSITION_BITS) - 1;
 const POSITION_MASK: u64 = POSITION_MAX as u64;
+/// The caustic flag, above the three 21-bit coordinates.
+const CAUSTIC_BIT: u64 = 1 << 63;
 
 /// Largest bounce depth a compact photon stores; deeper photons are stored at this depth.
 pub const MAX_DEPTH: u8 = 63;
@@ -130,6 +135,12 @@ impl CompactPhoton {
     pub(crate) fn set_axis(&mut self, axis: usize) {
         debug_assert!(axis < 3);
         self.dir = (self.dir & !(3 << AXIS_SHIFT)) | ((axis as u32) << AXIS_SHIFT);
+    }
+
+    /// Whether this is a caustic photon (`L S+ D`, see [`PhotonRecord::caustic`]).
+    #[inline]
+    pub fn is_caustic(&self) -> bool {
+        self.pos & CAUSTIC_BIT != 0
     }
 
     /// Bounce depth (0 = stored at the first hit after leaving the light).
@@ -343,7 +354,8 @@ impl Quantizer {
         let p = r.position;
         let pos = q(p.x, self.origin[0])
             | (q(p.y, self.origin[1]) << POSITION_BITS)
-            | (q(p.z, self.origin[2]) << (2 * POSITION_BITS));
+            | (q(p.z, self.origin[2]) << (2 * POSITION_BITS))
+            | if r.caustic { CAUSTIC_BIT } else { 0 };
         let depth = r.depth.min(MAX_DEPTH) as u32;
         CompactPhoton {
             pos,
@@ -444,6 +456,7 @@ impl Quantizer {
             power: self.power(p),
             direction: p.direction(),
             depth: p.depth(),
+            caustic: p.is_caustic(),
         }
     }
 
@@ -497,6 +510,7 @@ mod tests {
             power: Vec3::ONE,
             direction: Vec3::Z,
             depth: 0,
+            caustic: false,
         };
         let a = q.encode(&r(0.1, 0.9));
         let mut b = q.encode(&r(0.9, 0.1));
@@ -523,6 +537,7 @@ mod tests {
                     power,
                     direction: Vec3::Z,
                     depth: 0,
+                    caustic: false,
                 })
             })
             .collect();
@@ -553,6 +568,7 @@ mod tests {
                 power: Vec3::ONE,
                 direction: d,
                 depth: 255,
+                caustic: false,
             });
             assert_ne!(
                 p.dir & 0x00FF_FFFF,

@@ -166,6 +166,7 @@ mod tests {
                 power: Vec3::splat(phi),
                 direction: -Vec3::Y,
                 depth: 0,
+                caustic: false,
             })
             .collect();
         let map = PhotonMap::build(&records);

@@ -7,13 +7,13 @@ use super::direct::LightSampler;
 use super::estimate::{radiance_estimate, Lookup};
 use super::sampler::{dim, PixelSampler};
 use super::{RenderMaps, View, MAX_SPECULAR};
-use crate::brdf::Brdf;
+use crate::brdf::{Brdf, Transport};
 use crate::embree::{CommittedScene, Hit, Ray};
 use crate::engine::albedo::AlbedoTable;
 use crate::photon_map::{Neighbor, PhotonMap};
 use crate::rng::Rng;
 use crate::sampling::Frame;
-use crate::scene::{Material, Scene};
+use crate::scene::{consistent_with_geometry, Material, Scene};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 use std::time::Instant;
@@ -31,6 +31,8 @@ pub(super) struct Ctx<'a> {
     pub(super) light_samples: u32,
     pub(super) spp: u32,
     pub(super) lookup: Lookup,
+    /// The caustic map's kernel.
+    pub(super) caustic_lookup: Lookup,
     pub(super) eps: f32,
     pub(super) show_emitters: bool,
 }
@@ -121,8 +123,10 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// Follows `ray` through mirrors to its first non-delta hit. Emission seen
-    /// at hit `first_emission` (0 = the first hit) and later is added to `emitted`.
+    /// Follows `ray` through mirrors and glass to its first non-specular
+    /// hit (camera paths carry radiance: [`Transport::Radiance`]). Emission
+    /// seen at hit `first_emission` (0 = the first hit) and later is added
+    /// to `emitted`.
     fn trace(
         &self,
         mut ray: Ray,
@@ -137,37 +141,63 @@ impl<'a> Ctx<'a> {
             let dir = ray.dir.normalize();
             let wo = -dir;
             let position = ray.at(h.t);
-            let normal = if h.ng.dot(dir) > 0.0 { -h.ng } else { h.ng };
+            let from_inside = h.ng.dot(dir) > 0.0;
+            if from_inside {
+                // The segment just travelled lay inside this (closed) object.
+                if let Some(sigma) = material.brdf.interior_attenuation() {
+                    throughput *= (-sigma * h.t * ray.dir.length()).exp();
+                }
+            }
+            let normal = if from_inside { -h.ng } else { h.ng };
             if bounce >= first_emission {
                 *emitted += throughput * Self::emitted(material, &h, wo);
             }
-            let shading = self.shading_normal(&h, normal, wo);
-            if !material.brdf.is_delta() {
+            if !material.brdf.is_specular() {
                 return Some(SurfaceHit {
                     position,
                     normal,
-                    shading,
+                    shading: self.shading_normal(&h, normal, wo),
                     wo,
                     material,
                     material_index: h.material as usize,
                     throughput,
                 });
             }
-            let frame = Frame::from_normal(shading);
+            let n = self
+                .scene
+                .scattering_normal(&material.brdf, &h, from_inside);
+            let frame = Frame::from_normal(n);
+            let wo_l = frame.local_from_world(wo);
             let bs = material
                 .brdf
-                .sample(frame.local_from_world(wo), rng.next_2d())?;
+                .sample_in(wo_l, rng.next_2d(), Transport::Radiance)?;
             throughput *= bs.weight;
             let out = frame.world_from_local(bs.wo);
-            if throughput.max_element() <= 0.0 || out.dot(normal) <= 0.0 {
+            let transmitted = bs.wo.z * wo_l.z < 0.0;
+            let alive = throughput.max_element() > 0.0; // false for NaN too
+            if !alive || !consistent_with_geometry(h.ng, wo, out, transmitted) {
                 return None;
             }
-            ray = Ray::new(position + normal * self.eps, out);
+            let side = if out.dot(h.ng) < 0.0 { -h.ng } else { h.ng };
+            ray = Ray::new(position + side * self.eps, out);
         }
         None
     }
 
     fn estimate(&self, map: &PhotonMap, s: &SurfaceHit, sc: &mut Scratch) -> Vec3 {
+        self.estimate_with(map, self.lookup, s, sc)
+    }
+
+    fn estimate_with(
+        &self,
+        map: &PhotonMap,
+        lookup: Lookup,
+        s: &SurfaceHit,
+        sc: &mut Scratch,
+    ) -> Vec3 {
+        if map.is_empty() {
+            return Vec3::ZERO;
+        }
         let t = sc.start_lookup();
         let v = radiance_estimate(
             map,
@@ -175,7 +205,7 @@ impl<'a> Ctx<'a> {
             s.position,
             s.normal,
             s.wo,
-            self.lookup,
+            lookup,
             &mut sc.neighbors,
         )
         .value;
@@ -237,13 +267,12 @@ impl<'a> Ctx<'a> {
                 continue;
             }
             let ray = Ray::new(s.position + s.normal * self.eps, dir);
-            // Emission straight from a light was counted by light sampling;
-            // after a mirror it is a caustic only the gather finds.
+            // Emission straight from a light was counted by light sampling,
+            // and through mirrors and glass by the caustic map.
             let mut emitted = Vec3::ZERO;
-            if let Some(y) = self.trace(ray, 1, rng, &mut emitted) {
+            if let Some(y) = self.trace(ray, u32::MAX, rng, &mut emitted) {
                 sum += bs.weight * y.throughput * self.cached_radiance(maps, &y, rng, sc);
             }
-            sum += bs.weight * emitted;
         }
         sum / self.gather as f32
     }
@@ -289,7 +318,8 @@ impl<'a> Ctx<'a> {
                 } else {
                     self.estimate(&m.indirect, &s, sc)
                 };
-                self.direct(&s, px) + indirect
+                let caustic = self.estimate_with(&m.caustic, self.caustic_lookup, &s, sc);
+                self.direct(&s, px) + caustic + indirect
             }
             (_, None) => Vec3::ZERO,
         };

@@ -20,24 +20,29 @@
 //! ```
 //!
 //! # The estimator ([`View::Full`])
-//! A camera ray follows perfect mirrors (at most [`MAX_SPECULAR`] bounces) to
-//! its first non-delta hit `x`. The pixel's radiance is
+//! A camera ray follows mirrors and glass (at most [`MAX_SPECULAR`] bounces,
+//! one sampled direction each: reflection or refraction by Fresnel) to its
+//! first non-specular hit `x`, as pbrt-v4's SPPM places its visible point.
+//! The pixel's radiance is (Jensen's decomposition)
 //! - the emission of an emitter the (possibly mirrored) ray reaches, `L0 cos^n`;
 //! - **direct light** at `x`: one sample per light and pixel sample (area
 //!   lights: an area-uniform point, the `cos^n` radiance, a shadow ray;
 //!   point and spot lights: their intensity over `r^2` and a shadow ray);
-//! - **indirect light** at `x`, either
+//! - **caustics** at `x` (`L S+ x`, light that came through mirrors and
+//!   glass only): the radiance estimate of the **caustic map** (the photons
+//!   flagged caustic by the tracer) with its own, narrower kernel
+//!   ([`RenderConfig::caustic_k`], [`RenderConfig::caustic_max_radius`]);
+//! - **the rest of the indirect light** at `x`, either
 //!   - without final gather: the radiance estimate of the photons stored at
-//!     depth >= 1 (the **indirect map**). Depth-0 photons *are* the direct
-//!     light, already counted by light sampling; photons after a mirror
-//!     bounce have depth >= 1, so caustics come from the map too;
+//!     depth >= 1 that are not caustic photons (the **indirect map**).
+//!     Depth-0 photons *are* the direct light, already counted by light
+//!     sampling;
 //!   - with final gather (`G` rays): `G` BRDF-sampled rays from `x`, each
-//!     followed through mirrors to a non-delta hit `y`, where the **full map**
-//!     (all depths: the light leaving `y` includes its direct light) gives the
-//!     radiance. A gather ray that reaches an emitter after a mirror adds its
-//!     emission (a caustic path light sampling cannot find); one that reaches
-//!     an emitter straight away adds only the reflection there (the emission
-//!     was counted by light sampling).
+//!     followed through mirrors and glass to a non-specular hit `y`, where
+//!     the **full map** (all depths: the light leaving `y` includes its
+//!     direct light and its own caustics) gives the radiance. A gather ray
+//!     that reaches an emitter adds nothing: straight away it is the direct
+//!     light, through a specular chain it is a caustic at `x`, both counted.
 //!
 //! The split is exact: every light path `L ... x E` is counted once.
 //!
@@ -93,7 +98,7 @@ pub use image::{check_output_path, Image, ToneMap, MAX_DIMENSION};
 pub use metrics::{mean_bias, relative_rmse, relative_rmse_masked, rmse};
 pub use path::{Integrator, PathPart, PathTracer};
 pub use path_render::{
-    indirect_irradiance, light_pixels, render_path, render_path_with, PathHalves,
+    indirect_irradiance, light_pixels, render_path, render_path_with, specular_pixels, PathHalves,
 };
 pub use quadrature::{floor_points, quadrature_irradiance};
 pub use run::{render, render_with, RenderStats};
@@ -107,6 +112,15 @@ pub type RenderMaps = crate::engine::Maps;
 
 /// Default number of photons in a radiance estimate.
 pub const DEFAULT_K: usize = 100;
+
+/// Default number of caustic photons in a caustic estimate: fewer than
+/// [`DEFAULT_K`], so the kernel stays as narrow as a caustic's features.
+pub const DEFAULT_CAUSTIC_K: usize = 50;
+
+/// Default largest caustic kernel radius, as a fraction of the largest
+/// radius of the other estimates: a caustic is sharp where it is bright,
+/// and where it is faint a wide kernel would spread it over its shadow.
+pub const CAUSTIC_RADIUS_FRACTION: f32 = 0.25;
 
 /// Default search radius as a fraction of the scene's bounding-box diagonal:
 /// wide enough that only truly empty regions hit it.
@@ -160,6 +174,11 @@ pub struct RenderConfig {
     pub cache_stride: u32,
     /// Photons per radiance estimate.
     pub k: usize,
+    /// Caustic photons per caustic estimate (the caustic map's own kernel).
+    pub caustic_k: usize,
+    /// Largest caustic kernel radius (world units); `None` is
+    /// [`CAUSTIC_RADIUS_FRACTION`] of the other estimates' largest radius.
+    pub caustic_max_radius: Option<f32>,
     /// Largest search radius (world units); `None` is
     /// [`DEFAULT_MAX_RADIUS_FRACTION`] of the scene's diagonal.
     pub max_radius: Option<f32>,
@@ -192,6 +211,8 @@ impl RenderConfig {
             light_samples: 1,
             cache_stride: cache::DEFAULT_STRIDE,
             k: DEFAULT_K,
+            caustic_k: DEFAULT_CAUSTIC_K,
+            caustic_max_radius: None,
             max_radius: None,
             view: View::Full,
             seed: 1,
@@ -272,6 +293,12 @@ impl RenderConfig {
                 format!("must be in 1..=10000, got {}", self.k),
             ));
         }
+        if self.caustic_k == 0 || self.caustic_k > 10_000 {
+            return Err(Error::param(
+                "caustic k",
+                format!("must be in 1..=10000, got {}", self.caustic_k),
+            ));
+        }
         if let Some((a, b)) = self.rows {
             if a >= b || b > self.height {
                 return Err(Error::param(
@@ -280,12 +307,17 @@ impl RenderConfig {
                 ));
             }
         }
-        if let Some(r) = self.max_radius {
-            if !(r.is_finite() && r > 0.0) {
-                return Err(Error::param(
-                    "max radius",
-                    format!("must be a positive number, got {r}"),
-                ));
+        for (name, r) in [
+            ("max radius", self.max_radius),
+            ("caustic max radius", self.caustic_max_radius),
+        ] {
+            if let Some(r) = r {
+                if !(r.is_finite() && r > 0.0) {
+                    return Err(Error::param(
+                        name,
+                        format!("must be a positive number, got {r}"),
+                    ));
+                }
             }
         }
         Ok(())

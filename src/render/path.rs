@@ -36,11 +36,12 @@
 
 use super::path_light::{area_light_pdf, next_event};
 use super::ray_epsilon;
+use crate::brdf::Transport;
 use crate::embree::{CommittedScene, Ray};
 use crate::error::{Error, Result};
 use crate::rng::Rng;
 use crate::sampling::Frame;
-use crate::scene::{Light, Scene};
+use crate::scene::{consistent_with_geometry, Light, Scene};
 use glam::Vec3;
 
 /// Non-delta vertices before Russian roulette starts.
@@ -82,12 +83,18 @@ pub enum PathPart {
     Direct,
     /// Indirect light at the first non-delta hit only.
     Indirect,
+    /// The caustic part of the indirect light (`L S+ x`): light that reached
+    /// the first non-specular hit `x` from an emitter through mirrors and
+    /// glass only. What the photon renderer reads from its caustic map.
+    Caustic,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Class {
     Seen,
     Direct,
+    /// Indirect, through specular surfaces only since `x`.
+    Caustic,
     Indirect,
 }
 
@@ -97,7 +104,8 @@ impl PathPart {
             (_, Class::Seen) => show_emitters && self != PathPart::Indirect,
             (PathPart::Full, _) => true,
             (PathPart::Direct, c) => c == Class::Direct,
-            (PathPart::Indirect, c) => c == Class::Indirect,
+            (PathPart::Indirect, c) => matches!(c, Class::Indirect | Class::Caustic),
+            (PathPart::Caustic, c) => c == Class::Caustic,
         }
     }
 }
@@ -182,7 +190,14 @@ impl<'a> PathTracer<'a> {
             let dir = ray.dir.normalize();
             let wo = -dir;
             let pos = ray.at(h.t);
-            let normal = if h.ng.dot(dir) > 0.0 { -h.ng } else { h.ng };
+            let from_inside = h.ng.dot(dir) > 0.0;
+            let normal = if from_inside { -h.ng } else { h.ng };
+            if from_inside {
+                // The segment just travelled lay inside this (closed) object.
+                if let Some(sigma) = mat.brdf.interior_attenuation() {
+                    beta *= (-sigma * h.t * ray.dir.length()).exp();
+                }
+            }
             if let Some(e) = mat.emission {
                 let cos_l = h.ng.dot(wo);
                 let class = match st {
@@ -191,6 +206,7 @@ impl<'a> PathTracer<'a> {
                         non_delta: 1,
                         delta_since_x: false,
                     } => Class::Direct,
+                    State { non_delta: 1, .. } => Class::Caustic,
                     _ => Class::Indirect,
                 };
                 if cos_l > 0.0 && part.counts(class, show_emitters) {
@@ -205,21 +221,32 @@ impl<'a> PathTracer<'a> {
                     l += beta * le * w;
                 }
             }
-            let frame = Frame::from_normal(normal);
-            let wo_l = frame.local_from_world(wo);
-            if mat.brdf.is_delta() {
+            if mat.brdf.is_specular() {
+                // Mirrors and glass (rough glass too: sampled, not lit by
+                // next-event estimation, whose shadow rays it blocks).
                 st.delta_since_x |= st.non_delta >= 1;
-                let Some(bs) = mat.brdf.sample(wo_l, rng.next_2d()) else {
+                let n = self.scene.scattering_normal(&mat.brdf, &h, from_inside);
+                let frame = Frame::from_normal(n);
+                let wo_l = frame.local_from_world(wo);
+                let Some(bs) = mat.brdf.sample_in(wo_l, rng.next_2d(), Transport::Radiance) else {
                     break;
                 };
                 beta *= bs.weight;
-                if beta.max_element() <= 0.0 {
+                let out = frame.world_from_local(bs.wo);
+                let transmitted = bs.wo.z * wo_l.z < 0.0;
+                if !(beta.max_element() > 0.0)
+                    || !beta.is_finite()
+                    || !consistent_with_geometry(h.ng, wo, out, transmitted)
+                {
                     break;
                 }
                 prev = None;
-                ray = Ray::new(pos + normal * self.eps, frame.world_from_local(bs.wo));
+                let side = if out.dot(h.ng) < 0.0 { -h.ng } else { h.ng };
+                ray = Ray::new(pos + side * self.eps, out);
                 continue;
             }
+            let frame = Frame::from_normal(normal);
+            let wo_l = frame.local_from_world(wo);
             st.non_delta += 1;
             // Past the first non-delta vertex there is no direct light left.
             if part == PathPart::Direct && st.non_delta > 1 {

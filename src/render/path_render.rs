@@ -199,6 +199,32 @@ pub fn light_pixels(scene: &Scene, rt: &CommittedScene, cfg: &RenderConfig) -> R
         .collect())
 }
 
+/// For each pixel, whether the ray through its centre first hits a specular
+/// surface (a mirror or glass): not a caustic's pixel, whatever the image
+/// shows there.
+///
+/// # Errors
+/// [`crate::Error::InvalidScene`] when neither `cfg` nor the scene has a camera.
+pub fn specular_pixels(
+    scene: &Scene,
+    rt: &CommittedScene,
+    cfg: &RenderConfig,
+) -> Result<Vec<bool>> {
+    let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
+    let w = cfg.width as usize;
+    Ok((0..w * cfg.height as usize)
+        .map(|i| {
+            let ray = rays.ray((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+            rt.intersect(&ray).is_some_and(|h| {
+                scene
+                    .materials
+                    .get(h.material as usize)
+                    .is_some_and(|m| m.brdf.is_specular())
+            })
+        })
+        .collect())
+}
+
 /// Irradiance arriving at each point (on the side of its normal) that is
 /// *not* direct light: light that left some surface (caustics included), by
 /// `samples` cosine-distributed path-traced rays per point. `E_indirect =

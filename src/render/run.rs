@@ -7,6 +7,7 @@ use super::direct::LightSampler;
 use super::estimate::Lookup;
 use super::integrator::{Ctx, Scratch};
 use super::sampler::{dim, PixelSampler};
+use super::CAUSTIC_RADIUS_FRACTION;
 use super::{default_max_radius, ray_epsilon, Image, RenderConfig, RenderMaps, View};
 use crate::embree::CommittedScene;
 use crate::engine::albedo::AlbedoTable;
@@ -132,6 +133,12 @@ pub fn render_with(
         light_samples: cfg.light_samples,
         spp: cfg.spp,
         lookup,
+        caustic_lookup: Lookup {
+            k: cfg.caustic_k,
+            max_radius: cfg
+                .caustic_max_radius
+                .unwrap_or(max_radius * CAUSTIC_RADIUS_FRACTION),
+        },
         eps: ray_epsilon(scene),
         show_emitters: cfg.show_emitters,
     };

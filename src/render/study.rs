@@ -19,16 +19,28 @@
 //!   target: the time is trace + maps + that render.
 //! - **Bias**: the photon render's mean over the kept pixels against the
 //!   reference's, per channel, at the largest spp rendered.
+//! - **Caustic pixels**: those whose camera ray first hits a non-specular
+//!   surface and where the reference's caustic part (`L S+ D`, light through
+//!   mirrors and glass only: [`PathPart::Caustic`], path-traced at a quarter of the
+//!   reference's spp) is at least [`CAUSTIC_SHARE`] of the reference's
+//!   luminance. Every error, noise and time to the target is reported over
+//!   them too; the photon render's search goes on until both the whole
+//!   image and the caustic's pixels reach the target.
 
 use super::path::PathPart;
-use super::path_render::{light_pixels, PathHalves};
+use super::path_render::{light_pixels, specular_pixels, PathHalves};
 use super::{mean_bias, relative_rmse_masked, render_path, render_with, Image, RenderConfig, View};
 use crate::embree::CommittedScene;
 use crate::engine::{Budget, Mode, TraceConfig, Tracer};
 use crate::error::{Error, Result};
+use crate::sampling::luminance;
 use crate::scene::{PreparedScene, Scene};
 use serde::Serialize;
 use std::time::Instant;
+
+/// The least share of a pixel's reference luminance that its caustic part
+/// must have for the pixel to count as a caustic's.
+pub const CAUSTIC_SHARE: f32 = 0.2;
 
 /// What to measure.
 #[derive(Clone, Debug)]
@@ -77,10 +89,30 @@ pub struct PhotonRow {
     pub lookup_s: f64,
     /// relRMSE against the reference, its noise removed.
     pub rel_rmse: f64,
+    /// relRMSE over the caustic's pixels, its noise removed (`None`
+    /// without caustic pixels).
+    pub caustic_rel_rmse: Option<f64>,
     /// Mean bias per channel.
     pub bias: [f64; 3],
     /// trace + maps + render.
     pub total_s: f64,
+}
+
+/// The study over the caustic's pixels.
+#[derive(Clone, Debug, Serialize)]
+pub struct CausticResult {
+    /// How many pixels are the caustic's.
+    pub pixels: usize,
+    /// Relative noise of the reference over them.
+    pub reference_noise: f64,
+    /// The path tracer's timed render's error over them.
+    pub path_rel_rmse: f64,
+    /// The path tracer's time to the target over them (`1/sqrt(spp)`).
+    pub path_time_to_target_s: f64,
+    /// The fastest photon render at the target over them: its total time.
+    pub photon_time_to_target_s: Option<f64>,
+    /// photon time / path time, over the caustic's pixels.
+    pub ratio: Option<f64>,
 }
 
 /// The benchmark's result.
@@ -104,6 +136,31 @@ pub struct StudyResult {
     pub photon_time_to_target_s: Option<f64>,
     /// photon time / path time.
     pub ratio: Option<f64>,
+    /// The same over the caustic's pixels, when the image has any.
+    pub caustic: Option<CausticResult>,
+}
+
+/// The caustic's pixels (module docs): kept, first hit non-specular, and
+/// a caustic part of at least [`CAUSTIC_SHARE`] of the reference.
+fn caustic_pixels(
+    scene: &Scene,
+    rt: &CommittedScene,
+    base: &RenderConfig,
+    spp: u32,
+    reference: &Image,
+    keep: &[bool],
+) -> Result<Vec<bool>> {
+    let specular = specular_pixels(scene, rt, base)?;
+    let mut c = base.clone();
+    c.spp = spp.max(1);
+    c.seed = base.seed ^ 0xCA_0571C;
+    let caustic = render_path(scene, rt, &c, PathPart::Caustic, &|_, _| {})?;
+    Ok((0..keep.len())
+        .map(|i| {
+            let r = luminance(reference.pixels[i]);
+            keep[i] && !specular[i] && r > 0.0 && luminance(caustic.pixels[i]) >= CAUSTIC_SHARE * r
+        })
+        .collect())
 }
 
 /// Errors are measured against the reference with its noise taken out
@@ -167,6 +224,15 @@ pub fn run_study(
         100.0 * reference_noise
     ));
     halves.require_complete()?;
+    let caustic_mask = caustic_pixels(scene, rt, &base, cfg.reference_spp / 4, &reference, &keep)?;
+    let caustic_count = caustic_mask.iter().filter(|&&c| c).count();
+    let caustic_noise = halves.noise_rel(Some(&caustic_mask));
+    if caustic_count > 0 {
+        log(&format!(
+            "caustic: {caustic_count} pixels, reference noise {:.3} % there",
+            100.0 * caustic_noise
+        ));
+    }
 
     let mut pc = base.clone();
     pc.spp = cfg.path_spp;
@@ -195,6 +261,24 @@ pub fn run_study(
         100.0 * path_err,
         100.0 * cfg.target
     ));
+    let caustic_err = |img: &Image| -> Result<Option<f64>> {
+        if caustic_count == 0 {
+            return Ok(None);
+        }
+        Ok(Some(noise_free(
+            relative_rmse_masked(img, &reference, &caustic_mask)?,
+            caustic_noise,
+        )))
+    };
+    let path_caustic = caustic_err(&path)?;
+    let path_caustic_time = path_caustic.map(|e| path_s * (e / cfg.target).powi(2));
+    if let (Some(e), Some(t)) = (path_caustic, path_caustic_time) {
+        log(&format!(
+            "path over the caustic: relRMSE {:.2} % -> {:.0} % in {t:.1} s",
+            100.0 * e,
+            100.0 * cfg.target
+        ));
+    }
 
     let mut rows = Vec::new();
     for &n_max in &cfg.n_max {
@@ -214,6 +298,7 @@ pub fn run_study(
             let render_s = t.elapsed().as_secs_f64();
             let row = photon_row(&img, &reference, &keep, reference_noise, n_max, spp)?;
             let row = PhotonRow {
+                caustic_rel_rmse: caustic_err(&img)?,
                 photons: stored,
                 trace_s,
                 maps_s,
@@ -224,14 +309,17 @@ pub fn run_study(
                 ..row
             };
             log(&format!(
-                "photon N_MAX {n_max}: {spp} spp, total {:.2} s (render {render_s:.2}), relRMSE {:.2} %, bias {:+.2} {:+.2} {:+.2} %",
+                "photon N_MAX {n_max}: {spp} spp, total {:.2} s (render {render_s:.2}), relRMSE {:.2} %{}, bias {:+.2} {:+.2} {:+.2} %",
                 row.total_s,
                 100.0 * row.rel_rmse,
+                row.caustic_rel_rmse
+                    .map_or(String::new(), |e| format!(" (caustic {:.2} %)", 100.0 * e)),
                 100.0 * row.bias[0],
                 100.0 * row.bias[1],
                 100.0 * row.bias[2]
             ));
-            let reached = row.rel_rmse <= cfg.target;
+            let reached =
+                row.rel_rmse <= cfg.target && row.caustic_rel_rmse.is_none_or(|e| e <= cfg.target);
             rows.push(row);
             Ok(reached)
         };
@@ -272,7 +360,23 @@ pub fn run_study(
         .filter(|r| r.rel_rmse <= cfg.target)
         .map(|r| r.total_s)
         .min_by(f64::total_cmp);
+    let caustic = path_caustic.zip(path_caustic_time).map(|(e, t)| {
+        let best = rows
+            .iter()
+            .filter(|r| r.caustic_rel_rmse.is_some_and(|c| c <= cfg.target))
+            .map(|r| r.total_s)
+            .min_by(f64::total_cmp);
+        CausticResult {
+            pixels: caustic_count,
+            reference_noise: caustic_noise,
+            path_rel_rmse: e,
+            path_time_to_target_s: t,
+            photon_time_to_target_s: best,
+            ratio: best.map(|b| b / t),
+        }
+    });
     Ok(StudyResult {
+        caustic,
         reference_noise,
         reference_s,
         path_spp: cfg.path_spp,
@@ -303,6 +407,7 @@ fn photon_row(
         cache_build_s: 0.0,
         lookup_s: 0.0,
         rel_rmse: noise_free(relative_rmse_masked(img, reference, keep)?, noise),
+        caustic_rel_rmse: None,
         bias: mean_bias(img, reference, keep)?,
         total_s: 0.0,
     })

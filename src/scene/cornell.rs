@@ -3,9 +3,13 @@
 //!   blocks;
 //! - `cornell-empty`: `assets/cornell_empty.gltf`, the same five walls, light,
 //!   albedos and camera without the blocks (12 triangles): the paper's test
-//!   scene (§3.2, "une source lumineuse et des parois idéalement diffuses").
+//!   scene (§3.2, "une source lumineuse et des parois idéalement diffuses");
+//! - `cornell-glass`: `assets/cornell_glass.gltf`, the empty box with two
+//!   spheres of radius 100 on the floor, a mirror and a smooth glass ball
+//!   (IOR 1.5, a refracting volume), 20480 smooth-shaded triangles each.
 //!
-//! Both are written by `tools/make_cornell.py` (`--empty` for the second).
+//! All are written by `tools/make_cornell.py` (`--empty` for the second,
+//! `--glass` for the third).
 
 use super::Scene;
 use crate::error::Result;
@@ -16,10 +20,15 @@ pub const CORNELL_GLTF: &[u8] = include_bytes!("../../assets/cornell_box.gltf");
 /// The empty box (written by `tools/make_cornell.py --empty`).
 pub const CORNELL_EMPTY_GLTF: &[u8] = include_bytes!("../../assets/cornell_empty.gltf");
 
+/// The empty box with a mirror and a glass sphere (written by
+/// `tools/make_cornell.py --glass`).
+pub const CORNELL_GLASS_GLTF: &[u8] = include_bytes!("../../assets/cornell_glass.gltf");
+
 /// Every built-in scene: its command-line name and its glTF bytes.
-pub const BUILTINS: [(&str, &[u8]); 2] = [
+pub const BUILTINS: [(&str, &[u8]); 3] = [
     (super::BUILTIN_CORNELL, CORNELL_GLTF),
     (super::BUILTIN_CORNELL_EMPTY, CORNELL_EMPTY_GLTF),
+    (super::BUILTIN_CORNELL_GLASS, CORNELL_GLASS_GLTF),
 ];
 
 pub(super) fn load() -> Result<Scene> {

@@ -7,13 +7,17 @@
 //! - `KHR_lights_punctual` point and spot lights are read; directional lights are
 //!   rejected (they have no position to emit from).
 //! - The first perspective camera found becomes [`Scene::camera`].
-//! - Materials map to BRDFs by [`crate::brdf::from_gltf_pbr`] (metallic-roughness).
+//! - Materials map to BRDFs by [`crate::brdf::gltf_map::from_gltf_material`]:
+//!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_transmission`
+//!   (glass) and `KHR_materials_volume` (thin wall or refracting volume,
+//!   absorption); a value outside its range, partial transmission and
+//!   transmission on a metal are refused, naming the material.
 //! - Textures are ignored: only the constant factors are read.
-//! - `NORMAL` gives smooth shading normals ([`Scene::set_vertex_normals`]).
 //! - `NORMAL` gives smooth shading normals ([`Scene::set_vertex_normals`]).
 
 use super::{Camera, Emission, Light, Material, PointLight, Scene, SpotLight};
-use crate::brdf::{from_gltf_pbr, Brdf, Lambert};
+use crate::brdf::gltf_map::{from_gltf_material, GltfMaterial, GltfVolume};
+use crate::brdf::{Brdf, Lambert};
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec3};
@@ -180,17 +184,31 @@ fn load_node(
 }
 
 fn convert_material(m: &gltf::Material) -> Result<Material> {
+    let label = match m.index() {
+        Some(i) => super::validate::label("material", i, m.name()),
+        None => "the default material".to_string(),
+    };
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
-    let base = Vec3::new(r, g, b);
-    let brdf = from_gltf_pbr(base, pbr.metallic_factor(), pbr.roughness_factor())
-        .map_err(|e| Error::InvalidScene(format!("material `{}`: {e}", m.name().unwrap_or("?"))))?;
+    let input = GltfMaterial {
+        base_color: Vec3::new(r, g, b),
+        metallic: pbr.metallic_factor(),
+        roughness: pbr.roughness_factor(),
+        transmission: m.transmission().map(|t| t.transmission_factor()),
+        ior: m.ior(),
+        volume: m.volume().map(|v| GltfVolume {
+            thickness: v.thickness_factor(),
+            attenuation_distance: v.attenuation_distance(),
+            attenuation_color: Vec3::from(v.attenuation_color()),
+        }),
+    };
+    let brdf =
+        from_gltf_material(&input).map_err(|e| Error::InvalidScene(format!("{label}: {e}")))?;
     let strength = m.emissive_strength().unwrap_or(1.0);
     let radiance = Vec3::from(m.emissive_factor()) * strength;
     if !radiance.is_finite() || radiance.min_element() < 0.0 {
         return Err(Error::InvalidScene(format!(
-            "material `{}` has an invalid emission {radiance}",
-            m.name().unwrap_or("?")
+            "{label} has an invalid emission {radiance}"
         )));
     }
     let emission = if radiance.max_element() > 0.0 {

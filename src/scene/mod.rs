@@ -29,7 +29,7 @@ pub use checks::{MAX_COORDINATE, MAX_LIGHT_POWER, MAX_RADIANCE, MIN_LIGHT_POWER}
 
 pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
 pub use prepared::PreparedScene;
-pub use surface::{SurfacePoint, SurfaceSampler};
+pub use surface::{consistent_with_geometry, SurfacePoint, SurfaceSampler};
 
 use crate::brdf::Brdf;
 use crate::emitter::CosN;
@@ -45,6 +45,9 @@ pub const BUILTIN_CORNELL: &str = "cornell";
 /// The empty Cornell box (walls and light, no blocks): the paper's scene.
 #[doc(hidden)]
 pub const BUILTIN_CORNELL_EMPTY: &str = "cornell-empty";
+/// The empty Cornell box with a mirror sphere and a glass sphere.
+#[doc(hidden)]
+pub const BUILTIN_CORNELL_GLASS: &str = "cornell-glass";
 
 /// The names of every built-in scene (`Scene::open` accepts each).
 #[cfg(feature = "gltf")]

@@ -1,8 +1,10 @@
 //! Area-uniform points on a scene's surfaces: the fixed evaluation points of the
 //! density statistics (docs/method.md, "Density measurements") and the ray
-//! origins of `bench rays`.
+//! origins of `bench rays`; and the frame a hit scatters in.
 
 use super::{triangle_area, Scene};
+use crate::brdf::Brdf;
+use crate::raycast::Hit;
 use crate::rng::{hash2, Rng};
 use glam::Vec3;
 
@@ -104,4 +106,41 @@ impl SurfaceSampler {
             })
             .collect()
     }
+}
+
+impl Scene {
+    /// The normal of the scattering frame at hit `h` (`from_inside`: the ray
+    /// arrived on the side opposite the winding normal). For a transmitting
+    /// model it is the outside of the object (the winding side); for a
+    /// reflecting one the side the ray arrives from (surfaces are
+    /// two-sided). Specular models (mirrors, glass) use the interpolated
+    /// shading normal when the mesh has normals, so that a smooth sphere
+    /// reflects and refracts as a sphere, not as its facets; the others the
+    /// geometric normal. Photons and camera paths use the same frame.
+    pub fn scattering_normal(&self, brdf: &Brdf, h: &Hit, from_inside: bool) -> Vec3 {
+        let side = if from_inside && !brdf.is_transmissive() {
+            -h.ng
+        } else {
+            h.ng
+        };
+        if !brdf.is_specular() {
+            return side;
+        }
+        self.meshes
+            .get(h.geom_id as usize)
+            .and_then(|m| m.shading_normal(h.prim_id as usize, h.u, h.v))
+            .map(|ns| if ns.dot(side) < 0.0 { -ns } else { ns })
+            .unwrap_or(side)
+    }
+}
+
+/// Whether a specular sample in a shading frame is consistent with the
+/// geometry: a reflection leaves on the side it arrived from and a
+/// transmission crosses over. A shading normal can break this near the
+/// silhouette; such samples are dropped, the same way by photons and
+/// camera paths. `back` points back along the arriving ray, `out` is the
+/// sampled direction, `transmitted` whether the sample crossed the frame's
+/// plane.
+pub fn consistent_with_geometry(ng: Vec3, back: Vec3, out: Vec3, transmitted: bool) -> bool {
+    (out.dot(ng) * back.dot(ng) < 0.0) == transmitted
 }

@@ -68,11 +68,14 @@ pub(super) fn multiplicity(t: Type) -> u64 {
     }
 }
 
-/// The extensions a file may require: the two the loader reads, and the
+/// The extensions a file may require: the five the loader reads, and the
 /// texture ones (textures are ignored, so whatever they change is too).
-const SUPPORTED_REQUIRED: [&str; 5] = [
+const SUPPORTED_REQUIRED: [&str; 8] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_transmission",
+    "KHR_materials_volume",
     "KHR_texture_transform",
     "KHR_texture_basisu",
     "EXT_texture_webp",

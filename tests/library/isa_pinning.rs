@@ -62,7 +62,11 @@ const RECORDED: [(Option<&str>, Isa, [u64; 2]); 5] = [
         Isa::Avx2,
         [0x1f58_bfcc_1f0e_bf5a, 0x94dc_e814_7cd6_2450],
     ),
-    (None, Isa::Avx512, [0x8118_91c9_451d_cd35, 0x146a_762e_ee2b_d9cd]),
+    (
+        None,
+        Isa::Avx512,
+        [0x8118_91c9_451d_cd35, 0x146a_762e_ee2b_d9cd],
+    ),
 ];
 
 /// The CPU's vendor string (`vendor_id` of /proc/cpuinfo), if readable.

@@ -17,6 +17,7 @@ fn record(position: Vec3, rng: &mut Rng) -> PhotonRecord {
         power: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
         direction: random_direction(rng),
         depth: (rng.next_u32() % 8) as u8,
+        caustic: false,
     }
 }
 
@@ -296,6 +297,7 @@ fn positions_round_trip_within_half_a_step() {
                 power: Vec3::ONE,
                 direction: Vec3::Z,
                 depth: 0,
+                caustic: false,
             };
             let back = q.decode(&q.encode(&r)).position;
             for a in 0..3 {
@@ -335,6 +337,7 @@ fn powers_round_trip_within_the_shared_exponent_bound() {
                 power: p,
                 direction: Vec3::Z,
                 depth: 0,
+                caustic: false,
             };
             let back = q.decode(&q.encode(&r)).power;
             let clamped = p.max(Vec3::ZERO);
@@ -375,6 +378,7 @@ fn directions_round_trip_within_the_octahedral_bound() {
             power: Vec3::ONE,
             direction: d * 3.0, // need not be unit
             depth: 0,
+            caustic: false,
         };
         let back = q.decode(&q.encode(&r)).direction;
         assert!((back.length() - 1.0).abs() < 1e-6);
@@ -393,6 +397,7 @@ fn directions_round_trip_within_the_octahedral_bound() {
             power: Vec3::ONE,
             direction: d,
             depth: 0,
+            caustic: false,
         };
         assert_eq!(q.decode(&q.encode(&r)).direction, d);
     }
@@ -407,6 +412,7 @@ fn depths_round_trip_and_saturate() {
             power: Vec3::ONE,
             direction: Vec3::Z,
             depth,
+            caustic: false,
         };
         assert_eq!(q.decode(&q.encode(&r)).depth, depth.min(MAX_DEPTH));
     }

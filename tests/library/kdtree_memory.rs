@@ -27,6 +27,7 @@ fn build_peak_memory_is_close_to_the_photon_bytes() {
             power: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()),
             direction: Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5,
             depth: 0,
+            caustic: false,
         })
         .collect();
     let before = peak_rss();

@@ -34,6 +34,7 @@ fn planar_map(seed: u64, from_above: impl Fn(usize) -> bool) -> PhotonMap {
             power: Vec3::ONE,
             direction: if from_above(i) { -Vec3::Z } else { Vec3::Z },
             depth: 0,
+            caustic: false,
         })
         .collect();
     PhotonMap::build(&records)
@@ -175,6 +176,7 @@ fn small_and_empty_maps() {
             power: Vec3::ONE,
             direction: -Vec3::Z,
             depth: 0,
+            caustic: false,
         })
         .to_vec();
     let map = PhotonMap::build(&records);

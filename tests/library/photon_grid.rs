@@ -15,6 +15,7 @@ fn photon(position: Vec3) -> PhotonRecord {
         power: Vec3::new(0.5, 1.0, 2.0),
         direction: -Vec3::Z,
         depth: 1,
+        caustic: false,
     }
 }
 
@@ -144,6 +145,7 @@ fn spreading_a_rejected_photons_power_conserves_the_total() {
                 power,
                 direction: Vec3::Z,
                 depth: 0,
+                caustic: false,
             });
         }
     }

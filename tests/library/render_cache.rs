@@ -245,6 +245,7 @@ fn cache_is_unbiased_on_a_uniform_density() {
                 power: Vec3::ONE,
                 direction: -Vec3::Y,
                 depth: 0,
+                caustic: false,
             }
         })
         .collect();
