@@ -12,13 +12,25 @@ An open-fronted room (6 x 3 x 6 m, floor at y = 0, camera outside looking +z):
   with per-vertex NORMALs (smooth shading);
 - a glossy red plastic block (metallic 0, roughness 0.25 -> Cook-Torrance with a
   diffuse base), see brdf::from_gltf_pbr for the mapping;
+- a smooth glass ball in front, on the floor between the gold sphere and the
+  red block (KHR_materials_transmission 1, KHR_materials_ior 1.5,
+  KHR_materials_volume thicknessFactor = its diameter: a refracting volume, no
+  absorption -> Dielectric): tools/make_cornell.py's icosphere (outward
+  winding, a vertex at each pole), 4 subdivisions (5120 triangles), with
+  per-vertex NORMALs, lifted 2 mm off the floor so the two never touch;
 - four lights of different power, size and exponent: a large diffuse ceiling
   panel (cosn 0), a small sharp panel (extras.cosn = 20), a KHR_lights_punctual
   spot light and a dim point light.
 Light panels face down (their winding gives a -y normal): area lights are one-sided."""
 import base64, json, math, struct
 
+from make_cornell import icosphere  # tools/ is the script's directory, first on sys.path
+
 W, H, D = 3.0, 3.0, 3.0  # half-width, height, half-depth
+GOLD_CENTRE = (1.2, 0.7, 0.9)
+GLASS_RADIUS = 0.5
+GLASS_CENTRE = (0.3, GLASS_RADIUS + 0.002, -1.3)
+GLASS_LEVELS = 4
 
 MATERIALS = [
     {"name": "white", "pbrMetallicRoughness": {"baseColorFactor": [0.72, 0.72, 0.7, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}},
@@ -33,6 +45,10 @@ MATERIALS = [
     {"name": "panel_sharp", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0},
      "emissiveFactor": [1.0, 0.7, 0.4], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 80.0}},
      "extras": {"cosn": 20.0}},
+    {"name": "glass", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.0},
+     "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                    "KHR_materials_ior": {"ior": 1.5},
+                    "KHR_materials_volume": {"thicknessFactor": 2.0 * GLASS_RADIUS}}},
 ]
 MAT = {m["name"]: i for i, m in enumerate(MATERIALS)}
 
@@ -92,6 +108,16 @@ def sphere(c, r, nu=32, nv=16):
     return v, t
 
 
+def glass_ball(c, r, levels):
+    """make_cornell's icosphere of radius `r` about `c` (outward winding)."""
+    verts, tris = icosphere(levels)
+    return [tuple(c[i] + r * v[i] for i in range(3)) for v in verts], tris
+
+
+# Meshes shaded with per-vertex normals: the centre of each sphere.
+SMOOTH = {"gold_sphere": GOLD_CENTRE, "glass_sphere": GLASS_CENTRE}
+
+
 def look_rotation(d):
     """Quaternion (x, y, z, w) turning local -z onto the unit vector d."""
     f = (0.0, 0.0, -1.0)
@@ -117,15 +143,16 @@ def main():
         # Panels a centimetre under the ceiling, winding facing down.
         ("panel_diffuse", "panel_diffuse", *quad((-0.6, H - 0.01, -0.6), (0.6, H - 0.01, -0.6), (0.6, H - 0.01, 0.6), (-0.6, H - 0.01, 0.6))),
         ("panel_sharp", "panel_sharp", *quad((-1.85, H - 0.01, -1.35), (-1.55, H - 0.01, -1.35), (-1.55, H - 0.01, -1.05), (-1.85, H - 0.01, -1.05))),
-        ("gold_sphere", "gold", *sphere((1.2, 0.7, 0.9), 0.7)),
+        ("gold_sphere", "gold", *sphere(GOLD_CENTRE, 0.7)),
         ("red_block", "red_plastic", *box(-1.9, -1.0, 0.0, 0.9, -0.2, 0.7, 0.4)),
+        ("glass_sphere", "glass", *glass_ball(GLASS_CENTRE, GLASS_RADIUS, GLASS_LEVELS)),
     ]
     blob = bytearray()
     accessors, views, gl_meshes, nodes = [], [], [], []
     for name, mat, pos, idx in meshes:
         attributes = {}
-        if name == "gold_sphere":
-            centre = (1.2, 0.7, 0.9)
+        if name in SMOOTH:
+            centre = SMOOTH[name]
             normals = [unit(tuple(p[i] - centre[i] for i in range(3))) for p in pos]
             off = len(blob)
             for n in normals:
@@ -149,7 +176,7 @@ def main():
         gl_meshes.append({"name": name, "primitives": [{"attributes": attributes, "indices": len(accessors) - 1, "material": MAT[mat]}]})
         nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
     spot_pos = (2.2, 2.8, -1.8)
-    target = (1.2, 0.7, 0.9)
+    target = GOLD_CENTRE
     spot_dir = tuple(t - p for t, p in zip(target, spot_pos))
     nodes.append({"name": "spot", "translation": list(spot_pos), "rotation": look_rotation(spot_dir),
                   "extensions": {"KHR_lights_punctual": {"light": 0}}})
@@ -157,7 +184,8 @@ def main():
     nodes.append({"name": "camera", "camera": 0, "translation": [0.0, 1.5, -7.2], "rotation": [0.0, 1.0, 0.0, 0.0]})
     doc = {
         "asset": {"version": "2.0", "generator": "adaptive-pm tools/make_gallery.py"},
-        "extensionsUsed": ["KHR_materials_emissive_strength", "KHR_lights_punctual"],
+        "extensionsUsed": ["KHR_materials_emissive_strength", "KHR_lights_punctual",
+                           "KHR_materials_ior", "KHR_materials_transmission", "KHR_materials_volume"],
         "extensions": {"KHR_lights_punctual": {"lights": [
             {"name": "spot", "type": "spot", "color": [0.6, 0.75, 1.0], "intensity": 12.0,
              "spot": {"innerConeAngle": 0.25, "outerConeAngle": 0.4}},

@@ -162,6 +162,12 @@ impl Directionality {
 
 /// Clusters a sample set and turns the kept groups into peaks (steps 3-4).
 /// Public so that synthetic sample sets can be analysed directly.
+///
+/// Samples above and below the surface (`z >= 0`, `z < 0`) are clustered
+/// apart: a glass's reflection and refraction lobes are two peaks however
+/// close the clustering's linkage would put them (a hemisphere's samples are
+/// all on one side, so it is unchanged). The diffuse level and the 10 % rule
+/// stay those of the whole set.
 pub fn find_peaks(dirs: &[Vec3], values: &[f32], drawn: usize, p: &AnalysisParams) -> Vec<Peak> {
     let n = values.len().max(1) as f64;
     let mean = values.iter().map(|&v| v as f64).sum::<f64>() / n;
@@ -170,23 +176,38 @@ pub fn find_peaks(dirs: &[Vec3], values: &[f32], drawn: usize, p: &AnalysisParam
         .map(|&v| (v as f64 - mean).powi(2))
         .sum::<f64>()
         / n;
-    let groups = cluster::cluster(dirs, values, p.peak_variance_fraction as f64 * global);
+    let level = p.peak_variance_fraction as f64 * global;
     let min_samples = p.min_peak_fraction as f64 * drawn.max(values.len()) as f64;
-    groups
+    let (above, below): (Vec<usize>, Vec<usize>) = (0..dirs.len()).partition(|&i| dirs[i].z >= 0.0);
+    [above, below]
         .into_iter()
-        .filter(|g| g.len() as f64 >= min_samples)
-        .map(|g| {
-            let d: Vec<Vec3> = g.iter().map(|&i| dirs[i as usize]).collect();
-            let mean_value =
-                g.iter().map(|&i| values[i as usize] as f64).sum::<f64>() / g.len() as f64;
-            Peak {
-                samples: g.len(),
-                solid_angle: solid_angle::solid_angle(&d),
-                mean_value: mean_value as f32,
-                direction: d.iter().copied().sum::<Vec3>().normalize_or_zero(),
-            }
+        .filter(|side| !side.is_empty())
+        .flat_map(|side| {
+            let d: Vec<Vec3> = side.iter().map(|&i| dirs[i]).collect();
+            let v: Vec<f32> = side.iter().map(|&i| values[i]).collect();
+            cluster::cluster(&d, &v, level)
+                .into_iter()
+                .filter(|g| g.len() as f64 >= min_samples)
+                .map(|g| peak(&g, &d, &v))
+                .collect::<Vec<_>>()
         })
         .collect()
+}
+
+/// A kept group's solid angle, mean value and mean direction.
+fn peak(group: &[u32], dirs: &[Vec3], values: &[f32]) -> Peak {
+    let d: Vec<Vec3> = group.iter().map(|&i| dirs[i as usize]).collect();
+    let mean_value = group
+        .iter()
+        .map(|&i| values[i as usize] as f64)
+        .sum::<f64>()
+        / group.len() as f64;
+    Peak {
+        samples: group.len(),
+        solid_angle: solid_angle::solid_angle(&d),
+        mean_value: mean_value as f32,
+        direction: d.iter().copied().sum::<Vec3>().normalize_or_zero(),
+    }
 }
 
 /// The paper's estimate on each of the `p.sets` sample sets, averaged;

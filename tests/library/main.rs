@@ -7,6 +7,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod analysis_btdf;
 mod analysis_directionality;
 mod analysis_monotone;
 mod analysis_report;

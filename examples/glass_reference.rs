@@ -1,0 +1,149 @@
+//! The photon render of `cornell-glass` against a converged path-traced
+//! reference of the same scene (issue: glass and caustics, "done when").
+//!
+//! `cargo run --release --example glass_reference -- [REF_SPP] [SIZE] [N_MAX] [SPP] [CAUSTIC_K]`
+//! (defaults 16384, 256, and `render`'s defaults N_MAX 1e5 and 4 spp):
+//! path-traces the
+//! reference as two independent halves of REF_SPP/2 samples each (cached as
+//! OpenEXR in `target/glass-reference`, keyed by the scene, size and spp,
+//! since the reference takes minutes), renders the photon image (adaptive,
+//! gather through the cache, the other settings `render`'s defaults), and
+//! prints the relRMSE over the pixels that are not a light's own (its
+//! noise, from the halves, taken out in quadrature), the mean per channel
+//! against the reference's, and the same over the caustic's pixels (first
+//! hit non-specular, caustic part at least 20 % of the reference). Emitters
+//! seen from the camera are left out of both images (exact in both).
+
+use adaptive_pm::embree::Device;
+use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
+use adaptive_pm::render::study::CAUSTIC_SHARE;
+use adaptive_pm::render::{
+    light_pixels, mean_bias, relative_rmse_masked, render, render_path, specular_pixels, Image,
+    PathHalves, PathPart, RenderConfig,
+};
+use adaptive_pm::sampling::luminance;
+use adaptive_pm::scene::{PreparedScene, Scene};
+use std::path::PathBuf;
+use std::time::Instant;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let ref_spp: u32 = args.first().map_or(Ok(16384), |s| s.parse())?;
+    let size: u32 = args.get(1).map_or(Ok(256), |s| s.parse())?;
+    let n_max: u64 = args.get(2).map_or(Ok(100_000), |s| s.parse())?;
+    let spp: u32 = args.get(3).map_or(Ok(4), |s| s.parse())?;
+    let caustic_k: usize = args
+        .get(4)
+        .map_or(Ok(adaptive_pm::render::DEFAULT_CAUSTIC_K), |s| s.parse())?;
+    let dir = PathBuf::from("target/glass-reference");
+    std::fs::create_dir_all(&dir)?;
+    let scene = Scene::open("cornell-glass")?;
+    let device = Device::new()?;
+    let rt = scene.embree_geometry(&device)?;
+
+    let mut base = RenderConfig::new(size, size);
+    base.show_emitters = false;
+    let keep: Vec<bool> = light_pixels(&scene, &rt, &base)?
+        .iter()
+        .map(|l| !l)
+        .collect();
+
+    // The reference's halves, from the cache or rendered now.
+    let mut rc = base.clone();
+    rc.spp = (ref_spp / 2).max(1);
+    rc.seed = 0x5EF_E2E4CE;
+    let name = |half: &str| dir.join(format!("cornell-glass-{size}-{ref_spp}-{half}.exr"));
+    let (a, b) = match (Image::read_exr(name("a")), Image::read_exr(name("b"))) {
+        (Ok(a), Ok(b)) => {
+            eprintln!("reference: read from {}", dir.display());
+            (a, b)
+        }
+        _ => {
+            let t = Instant::now();
+            let progress = |done: u64, total: u64| {
+                if done % 32 == 0 {
+                    eprint!("\rreference: {done}/{total} rows");
+                }
+            };
+            let a = render_path(&scene, &rt, &rc, PathPart::Full, &progress)?;
+            rc.seed ^= 0xB;
+            let b = render_path(&scene, &rt, &rc, PathPart::Full, &progress)?;
+            eprintln!(
+                "\rreference: {ref_spp} spp in {:.1} s",
+                t.elapsed().as_secs_f64()
+            );
+            a.write_exr(name("a"))?;
+            b.write_exr(name("b"))?;
+            (a, b)
+        }
+    };
+    let halves = PathHalves {
+        a,
+        b,
+        dropped_samples: 0,
+    };
+    let reference = halves.mean();
+    let noise = halves.noise_rel(Some(&keep));
+
+    let mut cc = base.clone();
+    cc.spp = (ref_spp / 8).max(1);
+    cc.seed = 0xCA_0571C;
+    let caustic = render_path(&scene, &rt, &cc, PathPart::Caustic, &|_, _| {})?;
+    let specular = specular_pixels(&scene, &rt, &base)?;
+    let caustic_mask: Vec<bool> = (0..keep.len())
+        .map(|i| {
+            let r = luminance(reference.pixel(i as u32 % size, i as u32 / size));
+            let c = luminance(caustic.pixel(i as u32 % size, i as u32 / size));
+            keep[i] && !specular[i] && r > 0.0 && c >= CAUSTIC_SHARE * r
+        })
+        .collect();
+    let caustic_noise = halves.noise_rel(Some(&caustic_mask));
+
+    let t = Instant::now();
+    let out = Tracer::new(PreparedScene::new(scene.clone(), &rt)?)
+        .trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(n_max)))?;
+    let mut pc = base.clone();
+    pc.spp = spp;
+    pc.caustic_k = caustic_k;
+    let maps = pc.build_maps(out.photons, out.frame);
+    let img = render(&scene, &rt, Some(&maps), &pc, &|_, _| {})?;
+    let photon_s = t.elapsed().as_secs_f64();
+
+    // The images, to look at (the photon render's name carries its settings).
+    let tone = adaptive_pm::render::ToneMap::default();
+    reference.write_png(dir.join(format!("reference-{size}-{ref_spp}.png")), tone)?;
+    img.write_png(
+        dir.join(format!("photon-{size}-{n_max}-{spp}-{caustic_k}.png")),
+        tone,
+    )?;
+    let free = |e: f64, n: f64| (e * e - n * n).max(0.0).sqrt();
+    let e = relative_rmse_masked(&img, &reference, &keep)?;
+    let ec = relative_rmse_masked(&img, &reference, &caustic_mask)?;
+    let bias = mean_bias(&img, &reference, &keep)?;
+    let count = caustic_mask.iter().filter(|&&c| c).count();
+    println!(
+        "reference: {ref_spp} spp, {size}^2, relative noise {:.2} % (caustic pixels {:.2} %)",
+        100.0 * noise,
+        100.0 * caustic_noise
+    );
+    println!(
+        "photon render (adaptive, N_MAX {n_max}, {spp} spp, caustic k {caustic_k}): {photon_s:.2} s"
+    );
+    println!(
+        "  relRMSE over the non-light pixels: {:.2} % measured, {:.2} % with the reference's noise taken out",
+        100.0 * e,
+        100.0 * free(e, noise)
+    );
+    println!(
+        "  mean per channel against the reference: {:+.2} % {:+.2} % {:+.2} %",
+        100.0 * bias[0],
+        100.0 * bias[1],
+        100.0 * bias[2]
+    );
+    println!(
+        "  over the {count} caustic pixels: relRMSE {:.2} % measured, {:.2} % noise-free",
+        100.0 * ec,
+        100.0 * free(ec, caustic_noise)
+    );
+    Ok(())
+}
