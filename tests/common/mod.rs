@@ -186,3 +186,44 @@ impl MeanVar {
         (self.variance() / self.n as f64).sqrt()
     }
 }
+
+/// The one-sided tail `P(T > t)` of Student's t with `dof` degrees of
+/// freedom: `I_x(dof / 2, 1 / 2) / 2` with `x = dof / (dof + t^2)`, the
+/// incomplete beta integrated by Simpson's rule after `s = 1 - u^2`, which
+/// takes out its singularity at 1.
+pub fn student_t_tail(t: f64, dof: u64) -> f64 {
+    let a = dof as f64 / 2.0;
+    let simpson = |lo: f64, hi: f64| {
+        let n = 2000;
+        let h = (hi - lo) / n as f64;
+        let f = |u: f64| (1.0 - u * u).max(0.0).powf(a - 1.0);
+        let inner: f64 = (1..n)
+            .map(|i| f(lo + i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 })
+            .sum();
+        (f(lo) + inner + f(hi)) * h / 3.0
+    };
+    let x = dof as f64 / (dof as f64 + t * t);
+    0.5 * simpson((1.0 - x).sqrt(), 1.0) / simpson(0.0, 1.0)
+}
+
+/// The bound, in measured standard errors of a mean of `dof + 1` paired
+/// samples, that `comparisons` one-sided tests exceed together with
+/// probability `family_rate` (Bonferroni over Student's t; at least 4). A
+/// test that takes the worst of many means estimated from few samples
+/// would fail by chance against a plain 4-sigma bound.
+pub fn family_bound(comparisons: usize, dof: u64, family_rate: f64) -> f64 {
+    let target = family_rate / comparisons.max(1) as f64;
+    let (mut lo, mut hi) = (4.0f64, 1e3f64);
+    if student_t_tail(lo, dof) <= target {
+        return lo;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if student_t_tail(mid, dof) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
