@@ -16,12 +16,11 @@
 
 use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
-use adaptive_pm::render::study::CAUSTIC_SHARE;
+use adaptive_pm::render::study::caustic_pixels;
 use adaptive_pm::render::{
-    light_pixels, mean_bias, relative_rmse_masked, render, render_path, specular_pixels, Image,
-    PathHalves, PathPart, RenderConfig,
+    light_pixels, mean_bias, relative_rmse_masked, render, render_path, Image, PathHalves,
+    PathPart, RenderConfig,
 };
-use adaptive_pm::sampling::luminance;
 use adaptive_pm::scene::{PreparedScene, Scene};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -85,18 +84,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let reference = halves.mean();
     let noise = halves.noise_rel(Some(&keep));
 
-    let mut cc = base.clone();
-    cc.spp = (ref_spp / 8).max(1);
-    cc.seed = 0xCA_0571C;
-    let caustic = render_path(&scene, &rt, &cc, PathPart::Caustic, &|_, _| {})?;
-    let specular = specular_pixels(&scene, &rt, &base)?;
-    let caustic_mask: Vec<bool> = (0..keep.len())
-        .map(|i| {
-            let r = luminance(reference.pixel(i as u32 % size, i as u32 / size));
-            let c = luminance(caustic.pixel(i as u32 % size, i as u32 / size));
-            keep[i] && !specular[i] && r > 0.0 && c >= CAUSTIC_SHARE * r
-        })
-        .collect();
+    let caustic_mask = caustic_pixels(&scene, &rt, &base, ref_spp / 8, &reference, &keep)?;
     let caustic_noise = halves.noise_rel(Some(&caustic_mask));
 
     let t = Instant::now();

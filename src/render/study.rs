@@ -141,8 +141,12 @@ pub struct StudyResult {
 }
 
 /// The caustic's pixels (module docs): kept, first hit non-specular, and
-/// a caustic part of at least [`CAUSTIC_SHARE`] of the reference.
-fn caustic_pixels(
+/// a caustic part of at least [`CAUSTIC_SHARE`] of the reference, that part
+/// path-traced at `spp`.
+///
+/// # Errors
+/// Bad settings in `base`.
+pub fn caustic_pixels(
     scene: &Scene,
     rt: &CommittedScene,
     base: &RenderConfig,

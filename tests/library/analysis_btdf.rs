@@ -95,17 +95,19 @@ fn node_cosines(p: &AnalysisParams) -> Vec<f32> {
 /// (computed once for the tests that share them).
 fn default_tables() -> &'static [Vec<f32>] {
     static T: OnceLock<Vec<Vec<f32>>> = OnceLock::new();
-    T.get_or_init(|| {
-        let p = AnalysisParams::default();
-        ladder()
-            .par_iter()
-            .map(|&a| {
-                analyze_brdf(&glass(a), Estimator::Paper, &p)
-                    .unwrap()
-                    .values()
-            })
-            .collect()
-    })
+    T.get_or_init(|| tables(&ladder(), &AnalysisParams::default()))
+}
+
+/// The glass's `alpha_D` table at each GGX alpha, analysed in parallel.
+fn tables(alphas: &[f32], p: &AnalysisParams) -> Vec<Vec<f32>> {
+    alphas
+        .par_iter()
+        .map(|&a| {
+            analyze_brdf(&glass(a), Estimator::Paper, p)
+                .unwrap()
+                .values()
+        })
+        .collect()
 }
 
 fn mean(v: &[f32]) -> f64 {
@@ -277,19 +279,7 @@ fn rough_glass_falls_as_it_gets_smoother_at_each_angle() {
     // allowed only within `bound` of its standard errors; with no spread,
     // none.
     let alphas: Vec<f32> = ladder().into_iter().filter(|&a| a <= LOBE_ALPHA).collect();
-    let rows: Vec<Vec<Vec<f32>>> = (0..SEEDS)
-        .map(|s| {
-            let p = params(s);
-            alphas
-                .par_iter()
-                .map(|&a| {
-                    analyze_brdf(&glass(a), Estimator::Paper, &p)
-                        .unwrap()
-                        .values()
-                })
-                .collect()
-        })
-        .collect();
+    let rows: Vec<Vec<Vec<f32>>> = (0..SEEDS).map(|s| tables(&alphas, &params(s))).collect();
     let bins = AnalysisParams::default().theta_in_bins;
     // (z, node, rung, mean rise, standard error); z infinite for an exact rise.
     let mut worst: Option<(f64, usize, usize, f64, f64)> = None;
