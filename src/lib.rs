@@ -25,7 +25,7 @@
 //!     name: "lamp".into(),
 //!     brdf: Brdf::Lambert(Lambert { albedo: Vec3::ZERO }),
 //!     // Radiance 10 W/(m^2 sr), diffuse (cos^0) profile.
-//!     emission: Some(Emission { radiance: Vec3::splat(10.0), profile: CosN::new(0.0)? }),
+//!     emission: Some(Emission::new(Vec3::splat(10.0), CosN::new(0.0)?)),
 //! });
 //! let quad = |y: f32, s: f32| vec![
 //!     Vec3::new(-s, y, -s), Vec3::new(s, y, -s), Vec3::new(s, y, s), Vec3::new(-s, y, s),
@@ -57,7 +57,7 @@
 //! #         brdf: Brdf::Lambert(Lambert { albedo: Vec3::splat(0.5) }), emission: None });
 //! #     let lamp = scene.add_material(Material { name: "lamp".into(),
 //! #         brdf: Brdf::Lambert(Lambert { albedo: Vec3::ZERO }),
-//! #         emission: Some(Emission { radiance: Vec3::splat(10.0), profile: CosN::new(0.0)? }) });
+//! #         emission: Some(Emission::new(Vec3::splat(10.0), CosN::new(0.0)?)) });
 //! #     let quad = |y: f32, s: f32| vec![Vec3::new(-s, y, -s), Vec3::new(s, y, -s),
 //! #         Vec3::new(s, y, s), Vec3::new(-s, y, s)];
 //! #     scene.add_mesh("floor", quad(0.0, 1.0), vec![[0, 2, 1], [0, 3, 2]], grey)?;

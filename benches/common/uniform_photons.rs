@@ -1,5 +1,5 @@
 //! The photons the kd-tree comparisons with kiddo build and query, shared by
-//! `benches/kdtree.rs` and `examples/kdtree_vs_kiddo.rs` so that both measure
+//! `benches/kdtree.rs` and `benches/kdtree_vs_kiddo.rs` so that both measure
 //! the same maps.
 
 use adaptive_pm::photon_map::{CompactPhoton, PhotonRecord, Quantizer};

@@ -123,6 +123,9 @@ impl EmbreeArgs {
 /// Opens a scene by name or path, with an optional cos^n override.
 pub fn open_scene(name: &str, cosn: Option<f32>) -> anyhow::Result<Scene> {
     let mut scene = Scene::open(name).with_context(|| format!("scene `{name}`"))?;
+    for w in scene.warnings() {
+        eprintln!("warning: scene `{name}`: {w}");
+    }
     if let Some(n) = cosn {
         scene.set_cosn(CosN::new(n)?);
     }

@@ -35,6 +35,7 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
                 "power": [p.x, p.y, p.z],
                 "power_luminance": luminance(p),
                 "cosn": match l { Light::Area(a) => Some(a.emission.profile.exponent()), _ => None },
+                "two_sided": match l { Light::Area(a) => Some(a.emission.two_sided), _ => None },
                 "mesh": match l { Light::Area(a) => Some(scene.meshes()[a.mesh].name.clone()), _ => None },
             })
         })
@@ -49,6 +50,7 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             "bounds": {"min": [lo.x, lo.y, lo.z], "max": [hi.x, hi.y, hi.z]},
             "camera": scene.camera().map(|c| json!({"eye": [c.eye.x, c.eye.y, c.eye.z], "forward": [c.forward.x, c.forward.y, c.forward.z], "vfov_deg": c.vfov_deg})),
             "skipped_degenerate": scene.skipped_degenerate(),
+            "warnings": scene.warnings(),
         });
         println!("{out}");
         return Ok(());
@@ -60,6 +62,9 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             "skipped    {} zero-area triangles",
             scene.skipped_degenerate()
         );
+    }
+    for w in scene.warnings() {
+        println!("warning    {w}");
     }
     println!("meshes     {}", scene.meshes().len());
     for m in scene.meshes() {
@@ -89,9 +94,14 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
         let p = l.power();
         let extra = match l {
             Light::Area(a) => format!(
-                "area {:.1}  cos^n n = {}",
+                "area {:.1}  cos^n n = {}{}",
                 a.area,
-                a.emission.profile.exponent()
+                a.emission.profile.exponent(),
+                if a.emission.two_sided {
+                    "  two-sided"
+                } else {
+                    ""
+                }
             ),
             _ => "punctual (alpha_A = 1)".to_string(),
         };

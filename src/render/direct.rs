@@ -113,7 +113,7 @@ impl<'a> LightSampler<'a> {
         let cos_x = wi.dot(n).max(0.05);
         match &self.scene.lights[i] {
             Light::Area(a) => {
-                let cos_l = (-wi).dot(t.normal).max(0.05);
+                let cos_l = a.emission.facing((-wi).dot(t.normal)).max(0.05);
                 let le = luminance(a.emission.radiance)
                     * a.emission.profile.eval(Vec3::new(0.0, 0.0, cos_l));
                 le * cos_l * cos_x * a.area / r2.max(a.area)
@@ -169,7 +169,7 @@ impl<'a> LightSampler<'a> {
                 if r2 <= 0.0 {
                     return None;
                 }
-                let cos_l = n_l.dot(d) / r2.sqrt();
+                let cos_l = a.emission.facing(n_l.dot(d) / r2.sqrt());
                 if cos_l <= 0.0 {
                     return None;
                 }

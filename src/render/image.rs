@@ -91,6 +91,7 @@ impl ToneMap {
     }
 }
 
+#[cfg(feature = "image-io")]
 fn io_err(path: &Path, source: std::io::Error) -> Error {
     Error::Io {
         path: path.to_path_buf(),

@@ -94,14 +94,7 @@ struct SurfaceHit<'a> {
 impl<'a> Ctx<'a> {
     fn emitted(material: &Material, h: &Hit, wo: Vec3) -> Vec3 {
         match material.emission {
-            Some(e) => {
-                let cos = h.ng.dot(wo);
-                if cos > 0.0 {
-                    e.radiance * e.profile.eval(Vec3::new(0.0, 0.0, cos))
-                } else {
-                    Vec3::ZERO
-                }
-            }
+            Some(e) => e.radiance_at(h.ng.dot(wo)),
             None => Vec3::ZERO,
         }
     }

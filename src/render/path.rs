@@ -199,7 +199,7 @@ impl<'a> PathTracer<'a> {
                 }
             }
             if let Some(e) = mat.emission {
-                let cos_l = h.ng.dot(wo);
+                let cos_l = e.facing(h.ng.dot(wo));
                 let class = match st {
                     State { non_delta: 0, .. } => Class::Seen,
                     State {

@@ -50,7 +50,7 @@ pub(super) fn next_event(
                 if !(r2 > 0.0) {
                     continue;
                 }
-                let cos_l = n_l.dot(d) / r2.sqrt();
+                let cos_l = a.emission.facing(n_l.dot(d) / r2.sqrt());
                 if cos_l <= 0.0 {
                     continue;
                 }

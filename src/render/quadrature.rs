@@ -57,7 +57,7 @@ pub fn quadrature_irradiance(
                                     continue;
                                 }
                                 let r = r2.sqrt();
-                                let cos_l = n_l.dot(d) / r;
+                                let cos_l = a.emission.facing(n_l.dot(d) / r);
                                 let cos_x = -n.dot(d) / r;
                                 if cos_l <= 0.0 || cos_x <= 0.0 || !visible(p) {
                                     continue;
@@ -166,10 +166,7 @@ mod tests {
         let white = scene.add_material(Material {
             name: "w".into(),
             brdf: Lambert::new(Vec3::splat(0.5)).unwrap().into(),
-            emission: Some(Emission {
-                radiance: Vec3::ONE,
-                profile: CosN::new(0.0).unwrap(),
-            }),
+            emission: Some(Emission::new(Vec3::ONE, CosN::new(0.0).unwrap())),
         });
         let (a, h) = (1.0f32, 2.0f32);
         let quad = vec![

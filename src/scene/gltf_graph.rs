@@ -1,4 +1,10 @@
-//! The glTF node graph: acyclic, and bounded once expanded.
+//! The glTF node graph: acyclic, bounded once expanded, and a forest.
+//!
+//! glTF 2.0 (§3.5.2) makes the nodes disjoint trees: a node has at most one
+//! parent, a scene's roots have none, and no list names a node twice. The
+//! Khronos validator calls a file that breaks this invalid, and the loader
+//! refuses it ([`check_forest`]) after [`check_graph`], whose messages name
+//! cycles and explosive sharing more precisely.
 //!
 //! A node listed as the child of several parents is instantiated once per
 //! path, so 40 levels of shared children expand to 2^40 nodes. The loader
@@ -9,7 +15,11 @@
 
 use super::validate::{label, MAX_INSTANCED_TRIANGLES, MAX_NODE_INSTANCES};
 use crate::error::{Error, Result};
-use gltf::json::{mesh::Semantic, validation::Checked, Root};
+use gltf::json::{
+    mesh::{Mode, Semantic},
+    validation::Checked,
+    Root,
+};
 
 /// Triangles one instance of mesh `m` adds (from the accessors' counts).
 fn mesh_triangles(root: &Root, m: usize) -> u64 {
@@ -24,7 +34,11 @@ fn mesh_triangles(root: &Root, m: usize) -> u64 {
                     .get(&Checked::Valid(Semantic::Positions))
                     .map_or(0, |a| root.accessors[a.value()].count.0),
             };
-            count / 3
+            match p.mode {
+                Checked::Valid(Mode::TriangleStrip | Mode::TriangleFan) => count.saturating_sub(2),
+                Checked::Valid(Mode::Triangles) => count / 3,
+                _ => 0,
+            }
         })
         .fold(0u64, u64::saturating_add)
 }
@@ -91,6 +105,55 @@ pub(super) fn check_graph(root: &Root) -> Result<()> {
             return Err(Error::InvalidScene(format!(
                 "{name} expands to {tris} triangles, over the limit of {MAX_INSTANCED_TRIANGLES}"
             )));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a node with two parents, a child listed twice, a scene root that
+/// is some node's child, and a root listed twice (it would load twice).
+pub(super) fn check_forest(root: &Root) -> Result<()> {
+    let mut parent: Vec<Option<usize>> = vec![None; root.nodes.len()];
+    for (p, node) in root.nodes.iter().enumerate() {
+        for c in node.children.iter().flatten() {
+            let c = c.value();
+            let child = label("node", c, root.nodes[c].name.as_deref());
+            match parent[c] {
+                Some(q) if q == p => {
+                    return Err(Error::InvalidScene(format!(
+                        "{child} is listed twice among the children of {}",
+                        label("node", p, node.name.as_deref())
+                    )))
+                }
+                Some(q) => {
+                    return Err(Error::InvalidScene(format!(
+                        "{child} is a child of both {} and {}: glTF nodes form trees \
+                         (to instance a mesh, refer to it from several nodes)",
+                        label("node", q, root.nodes[q].name.as_deref()),
+                        label("node", p, node.name.as_deref())
+                    )))
+                }
+                None => parent[c] = Some(p),
+            }
+        }
+    }
+    for (si, s) in root.scenes.iter().enumerate() {
+        let scene = label("scene", si, s.name.as_deref());
+        let mut seen = vec![false; root.nodes.len()];
+        for r in &s.nodes {
+            let r = r.value();
+            let node = label("node", r, root.nodes[r].name.as_deref());
+            if std::mem::replace(&mut seen[r], true) {
+                return Err(Error::InvalidScene(format!(
+                    "{scene} lists {node} twice among its roots"
+                )));
+            }
+            if let Some(p) = parent[r] {
+                return Err(Error::InvalidScene(format!(
+                    "{scene} lists {node} as a root, but it is a child of {}",
+                    label("node", p, root.nodes[p].name.as_deref())
+                )));
+            }
         }
     }
     Ok(())

@@ -4,6 +4,15 @@
 //! - A material with a non-zero `emissiveFactor` (times `KHR_materials_emissive_strength`
 //!   when present) makes its meshes area lights. Their `cos^n` exponent is the
 //!   material's `extras.cosn` (a number >= 0; absent means 0, a diffuse emitter).
+//!   A `doubleSided` one emits from both faces, a single-sided one from its
+//!   front (the side its winding faces).
+//! - A node whose world transform has a negative determinant (a mirror, a
+//!   negative scale) reverses its triangles' winding, as glTF 2.0 §3.7.4 says:
+//!   their front side, emission side and normals follow the mirrored geometry.
+//! - Triangle lists, strips and fans are read (strips and fans become lists);
+//!   points and lines are skipped with a [`Scene::warnings`] entry naming them.
+//! - A primitive without a material gets the specification's default: a white
+//!   metal of roughness 1.
 //! - `KHR_lights_punctual` point and spot lights are read; directional lights are
 //!   rejected (they have no position to emit from).
 //! - The first perspective camera found becomes [`Scene::camera`].
@@ -17,7 +26,6 @@
 
 use super::{Camera, Emission, Light, Material, PointLight, Scene, SpotLight};
 use crate::brdf::gltf_map::{from_gltf_material, GltfMaterial, GltfVolume};
-use crate::brdf::{Brdf, Lambert};
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec3};
@@ -61,6 +69,7 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
     let buffers = super::buffers::load_buffers(gltf.document.as_json(), gltf.blob.clone(), base)?;
     super::gltf_data::check_data(gltf.document.as_json(), &buffers)?;
     super::gltf_graph::check_graph(gltf.document.as_json())?;
+    super::gltf_graph::check_forest(gltf.document.as_json())?;
     let doc = &gltf.document;
 
     let mut scene = Scene::new();
@@ -118,12 +127,16 @@ fn load_node(
     }
     if let Some(mesh) = node.mesh() {
         let mesh_label = super::validate::label("mesh", mesh.index(), mesh.name());
+        // glTF 2.0 §3.7.4: a negative determinant mirrors the node, which
+        // reverses its triangles' winding (and so their front side).
+        let mirrored = glam::Mat3::from_mat4(*world).determinant() < 0.0;
         for (pi, prim) in mesh.primitives().enumerate() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
-                return Err(Error::InvalidScene(format!(
-                    "{mesh_label} primitive {pi} has mode {:?}; only triangle lists are supported",
+            if !is_triangles(prim.mode()) {
+                scene.warnings.push(format!(
+                    "{mesh_label} primitive {pi} ({:?}) was skipped: only triangles are traced",
                     prim.mode()
-                )));
+                ));
+                continue;
             }
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
             let Some(positions) = reader.read_positions() else {
@@ -138,18 +151,20 @@ fn load_node(
                 Some(i) => i.into_u32().collect(),
                 None => (0..positions.len() as u32).collect(),
             };
-            let indices = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            let mut indices = triangle_list(prim.mode(), &flat);
+            if mirrored {
+                indices.iter_mut().for_each(|t| t.swap(1, 2));
+            }
             let material = match prim.material().index() {
                 Some(i) => material_ids[i],
-                None => *default_material.get_or_insert_with(|| {
-                    scene.add_material(Material {
-                        name: "default".into(),
-                        brdf: Brdf::Lambert(Lambert {
-                            albedo: Vec3::splat(0.8),
-                        }),
-                        emission: None,
-                    })
-                }),
+                None => match *default_material {
+                    Some(id) => id,
+                    None => {
+                        let id = scene.add_material(spec_default_material()?);
+                        *default_material = Some(id);
+                        id
+                    }
+                },
             };
             // NORMAL: shading normals, by the inverse transpose of the node's matrix.
             let normal_matrix = world.inverse().transpose();
@@ -181,6 +196,18 @@ fn load_node(
         }
     }
     Ok(())
+}
+
+/// glTF 2.0's default material (§3.9.6), for primitives without one: the
+/// metallic-roughness defaults, a white metal of roughness 1.
+fn spec_default_material() -> Result<Material> {
+    let brdf = from_gltf_material(&GltfMaterial::new(Vec3::ONE, 1.0, 1.0))
+        .map_err(|e| Error::InvalidScene(format!("the default material: {e}")))?;
+    Ok(Material {
+        name: "default".into(),
+        brdf,
+        emission: None,
+    })
 }
 
 fn convert_material(m: &gltf::Material) -> Result<Material> {
@@ -215,6 +242,9 @@ fn convert_material(m: &gltf::Material) -> Result<Material> {
         Some(Emission {
             radiance,
             profile: CosN::new(cosn_of(m)?)?,
+            // Viewers and Blender's Cycles light both faces of a
+            // double-sided emitter; a single-sided one emits from its front.
+            two_sided: m.double_sided(),
         })
     } else {
         None
@@ -279,6 +309,36 @@ fn convert_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Resu
             "light `{}` is directional; only point and spot lights are supported",
             light.name().unwrap_or("?")
         ))),
+    }
+}
+
+/// Whether a primitive mode makes triangles (lists, strips, fans).
+pub(super) fn is_triangles(mode: gltf::mesh::Mode) -> bool {
+    use gltf::mesh::Mode;
+    matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    )
+}
+
+/// Triangles of a primitive from its vertex indices, as glTF 2.0 §3.7.2.1
+/// builds them: strips alternate their winding so every triangle faces the
+/// same way, fans share the first vertex. Empty for points and lines.
+fn triangle_list(mode: gltf::mesh::Mode, flat: &[u32]) -> Vec<[u32; 3]> {
+    use gltf::mesh::Mode;
+    let n = flat.len();
+    match mode {
+        Mode::Triangles => flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        Mode::TriangleStrip => (0..n.saturating_sub(2))
+            .map(|i| {
+                let odd = i % 2;
+                [flat[i], flat[i + 1 + odd], flat[i + 2 - odd]]
+            })
+            .collect(),
+        Mode::TriangleFan => (1..n.saturating_sub(1))
+            .map(|i| [flat[i], flat[i + 1], flat[0]])
+            .collect(),
+        Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip => Vec::new(),
     }
 }
 

@@ -1,7 +1,8 @@
 //! Lights and photon emission from them.
 //!
 //! - [`AreaLight`]: an emissive mesh, radiance `L0 cos^n(theta)` about each
-//!   triangle's geometric normal, one-sided. Power `A L0 2 pi / (n + 2)`, exact.
+//!   triangle's geometric normal, from the front (or both faces when
+//!   two-sided). Power `sides A L0 2 pi / (n + 2)`, exact.
 //! - [`PointLight`]: `KHR_lights_punctual` point, intensity `I` (W/sr), power `4 pi I`.
 //! - [`SpotLight`]: `KHR_lights_punctual` spot, full intensity inside the inner
 //!   cone, a smooth falloff to the outer cone; power
@@ -114,11 +115,16 @@ impl AreaLight {
 
     /// Emitted power per channel.
     pub fn power(&self) -> Vec3 {
-        self.emission.radiance * self.area * self.emission.profile.projected_integral()
+        self.emission.radiance
+            * self.area
+            * self.emission.profile.projected_integral()
+            * self.emission.sides()
     }
 
     /// Samples a photon: position area-uniform, direction `~ cos^(n+1)`.
-    /// `u_tri` picks the triangle.
+    /// `u_tri` picks the triangle. A two-sided light picks the face with
+    /// the first half of `u_dir[0]` (front below 1/2, rescaled), so a
+    /// one-sided light's photons are unchanged by the option existing.
     #[inline]
     pub fn sample(&self, u_tri: f32, u_pos: [f32; 2], u_dir: [f32; 2]) -> EmittedPhoton {
         let i = self.triangle_at(u_tri * self.area);
@@ -126,11 +132,22 @@ impl AreaLight {
         let (b0, b1) = uniform_triangle(u_pos);
         let origin = a * b0 + b * b1 + c * (1.0 - b0 - b1);
         let frame = &self.frames[i];
+        let (u_dir, back) = match self.emission.two_sided {
+            false => (u_dir, false),
+            true if u_dir[0] < 0.5 => ([2.0 * u_dir[0], u_dir[1]], false),
+            true => ([2.0 * u_dir[0] - 1.0, u_dir[1]], true),
+        };
         let local = self.emission.profile.sample_emission(u_dir);
+        let (direction, normal) = (frame.world_from_local(local), frame.n);
+        let (direction, normal) = if back {
+            (-direction, -normal)
+        } else {
+            (direction, normal)
+        };
         EmittedPhoton {
             origin,
-            direction: frame.world_from_local(local),
-            normal: Some(frame.n),
+            direction,
+            normal: Some(normal),
             weight: Vec3::ONE,
         }
     }
@@ -299,10 +316,7 @@ mod tests {
 
     #[test]
     fn the_guide_finds_the_triangle_the_binary_search_finds() {
-        let emission = Emission {
-            radiance: Vec3::ONE,
-            profile: CosN::new(1.0).unwrap(),
-        };
+        let emission = Emission::new(Vec3::ONE, CosN::new(1.0).unwrap());
         let mut rng = Rng::new(7);
         let uneven: Vec<f32> = (0..1000)
             .map(|i| match i % 7 {

@@ -68,13 +68,60 @@ pub struct Material {
 }
 
 /// Emission of an area light: `L(theta) = radiance * cos^n(theta)` about the
-/// geometric normal (the side the triangle winding faces). One-sided.
+/// geometric normal (the side the triangle winding faces), from the front
+/// only, or from both faces when `two_sided` (glTF's `doubleSided`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Emission {
     /// Radiance along the normal, linear RGB.
     pub radiance: Vec3,
     /// The angular profile.
     pub profile: CosN,
+    /// Emits from both faces: twice the power, the same profile about each
+    /// face's normal.
+    pub two_sided: bool,
+}
+
+impl Emission {
+    /// A one-sided emission.
+    pub fn new(radiance: Vec3, profile: CosN) -> Self {
+        Emission {
+            radiance,
+            profile,
+            two_sided: false,
+        }
+    }
+
+    /// The cosine the profile sees for a direction at cosine `cos` from the
+    /// geometric normal: `cos` for a one-sided emitter (whose back, `cos <= 0`,
+    /// is dark), `|cos|` for a two-sided one.
+    #[inline]
+    pub fn facing(&self, cos: f32) -> f32 {
+        if self.two_sided {
+            cos.abs()
+        } else {
+            cos
+        }
+    }
+
+    /// Radiance leaving toward a direction at cosine `cos` from the geometric normal.
+    #[inline]
+    pub fn radiance_at(&self, cos: f32) -> Vec3 {
+        let c = self.facing(cos);
+        if c > 0.0 {
+            self.radiance * self.profile.eval(Vec3::new(0.0, 0.0, c))
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    /// Faces that emit: 1 or 2.
+    pub fn sides(&self) -> f32 {
+        if self.two_sided {
+            2.0
+        } else {
+            1.0
+        }
+    }
 }
 
 /// A triangle mesh with one material.
@@ -175,6 +222,8 @@ pub struct Scene {
     /// Per mesh, the caller's index of each kept triangle, when some were
     /// dropped (`None`: the identity). Maps `Hit::prim_id` back.
     pub(crate) source_triangles: Vec<Option<Vec<u32>>>,
+    /// What the loader skipped or changed without refusing the file.
+    pub(crate) warnings: Vec<String>,
 }
 
 /// Area of a triangle.
@@ -387,6 +436,12 @@ impl Scene {
     /// Zero-area triangles dropped by [`Scene::add_mesh`].
     pub fn skipped_degenerate(&self) -> usize {
         self.skipped_degenerate
+    }
+
+    /// What the loader skipped without refusing the file (a points or lines
+    /// primitive, ...), one sentence each, naming the object.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// The index, in the `indices` given to [`Scene::add_mesh`], of triangle

@@ -202,6 +202,12 @@ fn check_mesh(root: &Root, i: usize, m: &json::Mesh) -> Result<()> {
                         label("accessor", ai, acc.name.as_deref())
                     )));
                 }
+                if acc.min.is_none() || acc.max.is_none() {
+                    return Err(bad(format!(
+                        "{here}: its POSITION {} has no min and max (glTF 2.0 requires both)",
+                        label("accessor", ai, acc.name.as_deref())
+                    )));
+                }
                 if acc.buffer_view.is_none() && acc.sparse.is_none() {
                     return Err(bad(format!(
                         "{here}: its POSITION {} has neither a bufferView nor sparse data",
@@ -262,6 +268,9 @@ fn check_camera(i: usize, c: &json::Camera) -> Result<()> {
             if !(p.yfov.is_finite() && p.yfov > 0.0 && p.yfov < std::f32::consts::PI) {
                 return Err(bad(format!("{name} has yfov {}, outside (0, pi)", p.yfov)));
             }
+            if let Some(a) = p.aspect_ratio.filter(|a| !(a.is_finite() && *a > 0.0)) {
+                return Err(bad(format!("{name} has aspectRatio {a}; it must be > 0")));
+            }
             Ok(())
         }
         Checked::Valid(T::Orthographic) if c.orthographic.is_none() => Err(bad(format!(
@@ -277,6 +286,9 @@ fn check_light(i: usize, l: &json::extensions::scene::khr_lights_punctual::Light
     let name = label("light", i, l.name.as_deref());
     if !l.intensity.is_finite() || l.color.iter().any(|c| !c.is_finite()) {
         return Err(bad(format!("{name} has a non-finite color or intensity")));
+    }
+    if let Some(r) = l.range.filter(|r| !(r.is_finite() && *r > 0.0)) {
+        return Err(bad(format!("{name} has range {r}; it must be > 0")));
     }
     match l.type_ {
         Checked::Invalid => Err(bad(format!("{name} has an unknown type"))),
@@ -329,6 +341,14 @@ fn check_node(root: &Root, i: usize, n: &json::Node, lights: usize) -> Result<()
     if !finite {
         return Err(bad(format!("{name} has a non-finite transform")));
     }
+    if let Some(m) = n.matrix {
+        if n.translation.is_some() || n.rotation.is_some() || n.scale.is_some() {
+            return Err(bad(format!(
+                "{name} has both a matrix and translation, rotation or scale"
+            )));
+        }
+        check_trs_matrix(&name, &m)?;
+    }
     // glTF rotations are unit quaternions; the matrix the gltf crate makes
     // of another is no rotation (it distorted the mesh, silently).
     if let Some(q) = n.rotation.map(|q| q.0) {
@@ -336,6 +356,36 @@ fn check_node(root: &Root, i: usize, n: &json::Node, lights: usize) -> Result<()
         if (len - 1.0).abs() > 1e-3 {
             return Err(bad(format!(
                 "{name} has a rotation {q:?} of length {len}, not a unit quaternion"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// glTF 2.0 §3.5.3: a node's matrix must decompose into translation,
+/// rotation and scale: its bottom row is (0, 0, 0, 1) (no projection) and
+/// its three axes are orthogonal (no shear). Column-major, as in the file.
+fn check_trs_matrix(name: &str, m: &[f32; 16]) -> Result<()> {
+    let bottom = [m[3], m[7], m[11], m[15]];
+    let off = bottom
+        .iter()
+        .zip([0.0, 0.0, 0.0, 1.0])
+        .any(|(x, want)| (x - want).abs() > 1e-6);
+    if off {
+        return Err(bad(format!(
+            "{name} has a matrix whose bottom row is {bottom:?}, not [0, 0, 0, 1]: \
+             it is not a translation, rotation and scale"
+        )));
+    }
+    let axis =
+        |c: usize| glam::DVec3::new(m[4 * c].into(), m[4 * c + 1].into(), m[4 * c + 2].into());
+    for (a, b) in [(0, 1), (1, 2), (0, 2)] {
+        let (u, v) = (axis(a), axis(b));
+        let scale = u.length() * v.length();
+        if scale > 0.0 && u.dot(v).abs() > 1e-4 * scale {
+            return Err(bad(format!(
+                "{name} has a sheared matrix (its axes {a} and {b} are not orthogonal): \
+                 it is not a translation, rotation and scale"
             )));
         }
     }

@@ -35,10 +35,7 @@ fn closed_box(rho: f32, cosn: f32) -> Scene {
         brdf: Brdf::Lambert(Lambert {
             albedo: Vec3::splat(rho),
         }),
-        emission: Some(Emission {
-            radiance: Vec3::splat(10.0),
-            profile: CosN::new(cosn).unwrap(),
-        }),
+        emission: Some(Emission::new(Vec3::splat(10.0), CosN::new(cosn).unwrap())),
     });
     let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
     let corners = vec![

@@ -135,10 +135,7 @@ fn slab_scene(glass: Dielectric, thin: bool, tilt: f32) -> Scene {
     let light = s.add_material(Material {
         name: "light".into(),
         brdf: Lambert::new(Vec3::ZERO).unwrap().into(),
-        emission: Some(Emission {
-            radiance: Vec3::splat(1.0),
-            profile: CosN::new(1e5).unwrap(),
-        }),
+        emission: Some(Emission::new(Vec3::splat(1.0), CosN::new(1e5).unwrap())),
     });
     // A small quad facing down, tilted by `tilt` radians about z.
     let (c, sn) = (tilt.cos(), tilt.sin());
@@ -343,10 +340,7 @@ fn radiance_seen_from_inside_glass_is_eta_squared_times_the_outside() {
     let furnace = s.add_material(Material {
         name: "furnace".into(),
         brdf: Brdf::Lambert(Lambert::new(Vec3::ZERO).unwrap()),
-        emission: Some(Emission {
-            radiance: Vec3::splat(le),
-            profile: CosN::new(0.0).unwrap(),
-        }),
+        emission: Some(Emission::new(Vec3::splat(le), CosN::new(0.0).unwrap())),
     });
     // The furnace faces inwards.
     let walls = box_faces(Vec3::splat(-2.0), Vec3::splat(3.0));

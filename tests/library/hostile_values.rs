@@ -81,10 +81,7 @@ fn an_emitter_brighter_than_the_radiance_limit_is_refused() {
     let lamp = s.add_material(Material {
         name: "lamp".into(),
         brdf: Lambert::new(Vec3::ZERO).unwrap().into(),
-        emission: Some(Emission {
-            radiance: Vec3::splat(1e38),
-            profile: CosN::new(1.0).unwrap(),
-        }),
+        emission: Some(Emission::new(Vec3::splat(1e38), CosN::new(1.0).unwrap())),
     });
     let quad = vec![
         Vec3::new(0.0, 0.0, 1.0),

@@ -20,6 +20,7 @@ mod dielectric;
 mod embree_wrapper;
 mod engine;
 mod glass_transport;
+mod gltf_conformance;
 mod gltf_glass;
 mod hostile;
 mod hostile_values;

@@ -104,10 +104,7 @@ fn furnace_gives_le_over_one_minus_rho_on_every_pixel() {
     let mat = scene.add_material(Material {
         name: "furnace".into(),
         brdf: Lambert::new(Vec3::splat(rho)).unwrap().into(),
-        emission: Some(Emission {
-            radiance: Vec3::splat(le),
-            profile: CosN::new(0.0).unwrap(),
-        }),
+        emission: Some(Emission::new(Vec3::splat(le), CosN::new(0.0).unwrap())),
     });
     let mut pos = Vec::new();
     let mut idx = Vec::new();

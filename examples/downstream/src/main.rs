@@ -38,10 +38,7 @@ fn build_scene() -> adaptive_pm::Result<Scene> {
     let light = scene.add_material(Material {
         name: "light".into(),
         brdf: brdf::Brdf::Lambert(brdf::Lambert { albedo: Vec3::ZERO }),
-        emission: Some(Emission {
-            radiance: Vec3::splat(RADIANCE),
-            profile: CosN::new(0.0)?,
-        }),
+        emission: Some(Emission::new(Vec3::splat(RADIANCE), CosN::new(0.0)?)),
     });
     // Eight corners of the box; each face wound to face inwards.
     let h = HALF;

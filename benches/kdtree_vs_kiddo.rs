@@ -9,11 +9,13 @@
 //! kiddo's `ImmutableKdTree<f32, 3>` from `[f32; 3]`, as in `benches/kdtree.rs`),
 //! then 2000 k = 50 and radius queries (about 50 found) in the 1M map.
 //!
-//! `cargo run --release --example kdtree_vs_kiddo -- [ROUNDS]` (default 7)
-//! prints each round's times and ratios (ours / kiddo: below 1, ours is
+//! `cargo bench --bench kdtree_vs_kiddo -- [ROUNDS]` (default 7; it lives
+//! in the bench crate beside criterion's benches, so that kiddo is not built
+//! with the test suite) prints each round's times and ratios (ours / kiddo: below 1, ours is
 //! faster) and the median ratio of each row.
 //!
-//! `kdtree_vs_kiddo builds ours|kiddo N COUNT` only builds COUNT trees of N
+//! `cargo bench --bench kdtree_vs_kiddo -- builds ours|kiddo N COUNT` (or the
+//! binary it builds under `target/release/deps/`) only builds COUNT trees of N
 //! photons on one thread, for counting instructions, which drift much less
 //! than times: run it under `valgrind --tool=cachegrind --cache-sim=no` with
 //! COUNT = 20 and COUNT = 0 (the setup alone) and divide the difference of
@@ -27,7 +29,7 @@ use std::hint::black_box;
 use std::num::NonZero;
 use std::time::Instant;
 
-#[path = "../benches/common/uniform_photons.rs"]
+#[path = "common/uniform_photons.rs"]
 mod uniform_photons;
 use uniform_photons::{compact, points, records, unit_frame};
 
@@ -94,11 +96,15 @@ fn builds(args: &[String]) {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    // `cargo bench` appends `--bench` to the arguments.
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect();
     if args.first().map(String::as_str) == Some("builds") {
         return builds(&args[1..]);
     }
-    let rounds: usize = match std::env::args().nth(1) {
+    let rounds: usize = match args.first() {
         None => 7,
         Some(s) => s.parse().unwrap_or_else(|_| {
             eprintln!("ROUNDS: {s:?} is not a number");

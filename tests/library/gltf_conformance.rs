@@ -1,0 +1,534 @@
+//! glTF files read as the specification says: a node with a negative
+//! determinant reverses its winding (§3.7.4), a `doubleSided` emitter emits
+//! from both faces, strips and fans are triangles, points and lines are
+//! skipped with a warning, and a primitive without a material gets the
+//! specification's default. Scenes are written here as small JSON files with
+//! their geometry in a `data:` buffer.
+
+use adaptive_pm::brdf::Brdf;
+use adaptive_pm::embree::Device;
+use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
+use adaptive_pm::rng::Rng;
+use adaptive_pm::scene::{Light, PreparedScene, Scene};
+use glam::Vec3;
+use serde_json::{json, Value};
+use std::path::PathBuf;
+
+use crate::common;
+
+/// One primitive: positions, indices, mode, material.
+type Primitive<'a> = (&'a [[f32; 3]], &'a [u32], u32, Option<usize>);
+
+/// A file edit, and what the loader's refusal must say.
+type Case<'a> = (&'a str, &'a Doc, Box<dyn Fn(&mut Value)>, &'a str);
+
+/// A glTF document under construction: one buffer of f32 positions and u32
+/// indices, meshes of one primitive each.
+#[derive(Default)]
+struct Doc {
+    bin: Vec<u8>,
+    accessors: Vec<Value>,
+    views: Vec<Value>,
+    meshes: Vec<Value>,
+    nodes: Vec<Value>,
+    materials: Vec<Value>,
+}
+
+impl Doc {
+    fn view(&mut self, bytes: &[u8]) -> usize {
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        self.views
+            .push(json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len()}));
+        self.views.len() - 1
+    }
+
+    /// Adds a mesh of one primitive in `mode` (4 = triangles, 5 = strip,
+    /// 6 = fan, 1 = lines) and returns its index.
+    fn mesh(
+        &mut self,
+        positions: &[[f32; 3]],
+        indices: &[u32],
+        mode: u32,
+        material: Option<usize>,
+    ) -> usize {
+        self.primitives(&[(positions, indices, mode, material)])
+    }
+
+    fn primitives(&mut self, prims: &[Primitive]) -> usize {
+        let mut list = Vec::new();
+        for &(positions, indices, mode, material) in prims {
+            let bytes: Vec<u8> = positions
+                .iter()
+                .flatten()
+                .flat_map(|c| c.to_le_bytes())
+                .collect();
+            let v = self.view(&bytes);
+            let lo = (0..3).map(|k| positions.iter().map(|p| p[k]).fold(f32::INFINITY, f32::min));
+            let hi = (0..3).map(|k| {
+                positions
+                    .iter()
+                    .map(|p| p[k])
+                    .fold(f32::NEG_INFINITY, f32::max)
+            });
+            self.accessors.push(json!({"bufferView": v, "componentType": 5126, "count": positions.len(), "type": "VEC3",
+                "min": lo.collect::<Vec<_>>(), "max": hi.collect::<Vec<_>>()}));
+            let pos = self.accessors.len() - 1;
+            let bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+            let v = self.view(&bytes);
+            self.accessors
+                .push(json!({"bufferView": v, "componentType": 5125, "count": indices.len(), "type": "SCALAR"}));
+            let mut p = json!({"attributes": {"POSITION": pos}, "indices": self.accessors.len() - 1, "mode": mode});
+            if let Some(m) = material {
+                p["material"] = json!(m);
+            }
+            list.push(p);
+        }
+        self.meshes.push(json!({ "primitives": list }));
+        self.meshes.len() - 1
+    }
+
+    fn material(&mut self, m: Value) -> usize {
+        self.materials.push(m);
+        self.materials.len() - 1
+    }
+
+    fn node(&mut self, n: Value) {
+        self.nodes.push(n);
+    }
+
+    fn write(&self, dir: &std::path::Path) -> PathBuf {
+        let uri = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::encode(&self.bin)
+        );
+        let doc = json!({
+            "asset": {"version": "2.0"}, "scene": 0,
+            "scenes": [{"nodes": (0..self.nodes.len()).collect::<Vec<_>>()}],
+            "nodes": self.nodes, "meshes": self.meshes, "materials": self.materials,
+            "accessors": self.accessors, "bufferViews": self.views,
+            "buffers": [{"byteLength": self.bin.len(), "uri": uri}],
+        });
+        let path = dir.join("scene.gltf");
+        std::fs::write(&path, doc.to_string()).unwrap();
+        path
+    }
+}
+
+/// A unit square in the plane y = 0, wound to face +y (`up`) or -y.
+fn square(half: f32, up: bool) -> ([[f32; 3]; 4], [u32; 6]) {
+    let p = [
+        [-half, 0.0, -half],
+        [half, 0.0, -half],
+        [half, 0.0, half],
+        [-half, 0.0, half],
+    ];
+    // (p1 - p0) x (p3 - p0) = (+x) x (+z) = -y: [0, 1, 2] faces down.
+    let idx = if up {
+        [0, 2, 1, 0, 3, 2]
+    } else {
+        [0, 1, 2, 0, 2, 3]
+    };
+    (p, idx)
+}
+
+fn white(doc: &mut Doc) -> usize {
+    doc.material(json!({"name": "white", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0}}))
+}
+
+fn lamp(doc: &mut Doc, double_sided: bool) -> usize {
+    doc.material(
+        json!({"name": "lamp", "emissiveFactor": [1.0, 1.0, 1.0], "doubleSided": double_sided,
+        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0}}),
+    )
+}
+
+/// A floor facing up at y = 0 and a light square 1 above it, authored
+/// facing up (`light_up`) and placed by `light_node` (its mesh is set here).
+fn floor_and_light(dir: &std::path::Path, light_up: bool, light_node: Value) -> PathBuf {
+    let mut doc = Doc::default();
+    let (white, lamp) = (white(&mut doc), lamp(&mut doc, false));
+    let (p, i) = square(2.0, true);
+    let floor = doc.mesh(&p, &i, 4, Some(white));
+    doc.node(json!({ "mesh": floor }));
+    let (p, i) = square(0.25, light_up);
+    let light = doc.mesh(&p, &i, 4, Some(lamp));
+    let mut n = light_node;
+    n["mesh"] = json!(light);
+    doc.node(n);
+    doc.write(dir)
+}
+
+/// Photons emitted from the scene's only area light: the share whose
+/// direction has y < 0, and their count.
+fn downward_share(scene: &Scene, n: usize, seed: u64) -> f64 {
+    let mut rng = Rng::new(seed);
+    let light = &scene.lights()[0];
+    let down = (0..n)
+        .filter(|_| {
+            light
+                .sample(rng.next_f32(), rng.next_2d(), rng.next_2d())
+                .direction
+                .y
+                < 0.0
+        })
+        .count();
+    down as f64 / n as f64
+}
+
+/// Photons stored on the floor (y = 0) by a classic trace of `n_max` photons.
+fn floor_photons(scene: &Scene, n_max: u64, seed: u64) -> u64 {
+    let device = Device::new().unwrap();
+    let rt = scene.embree_geometry(&device).unwrap();
+    let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
+    let mut cfg = TraceConfig::new(Mode::Classic, Budget::NMax(n_max));
+    cfg.seed = seed;
+    let out = tracer.trace(&cfg).unwrap();
+    out.records()
+        .iter()
+        .filter(|r| r.position.y.abs() < 1e-3 && r.depth == 0)
+        .count() as u64
+}
+
+#[test]
+fn a_mirrored_light_faces_the_floor_like_an_unmirrored_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = [0.0, 1.0, 0.0];
+    // Authored facing down, placed as it is: the reference.
+    let reference = Scene::load(floor_and_light(
+        dir.path(),
+        false,
+        json!({ "translation": at }),
+    ))
+    .unwrap();
+    // Authored facing up, then mirrored in y: a negative determinant.
+    let mirrored = Scene::load(floor_and_light(
+        dir.path(),
+        true,
+        json!({"translation": at, "scale": [1.0, -1.0, 1.0]}),
+    ))
+    .unwrap();
+    // Mirrored in x: the vertices swap places, so the winding as stored
+    // turns to face up; the mirror image of a face looking down still looks down.
+    let mirrored_x = Scene::load(floor_and_light(
+        dir.path(),
+        false,
+        json!({"translation": at, "scale": [-1.0, 1.0, 1.0]}),
+    ))
+    .unwrap();
+    // Authored facing up, turned 180 degrees about x: a rotation keeps its winding.
+    let rotated = Scene::load(floor_and_light(
+        dir.path(),
+        true,
+        json!({"translation": at, "rotation": [1.0, 0.0, 0.0, 0.0]}),
+    ))
+    .unwrap();
+    // Authored up; the point reflection (-1, -1, -1) turns it down, the
+    // half turn about x up again: it faces the ceiling.
+    let blender = Scene::load(floor_and_light(
+        dir.path(),
+        true,
+        json!({"translation": at, "rotation": [1.0, 0.0, 0.0, 0.0], "scale": [-1.0, -1.0, -1.0]}),
+    ))
+    .unwrap();
+    let n = 4000;
+    for (name, scene, down) in [
+        ("reference", &reference, true),
+        ("mirrored in y", &mirrored, true),
+        ("mirrored in x", &mirrored_x, true),
+        ("rotated", &rotated, true),
+        ("reflected and turned", &blender, false),
+    ] {
+        let share = downward_share(scene, n, 1);
+        let want = if down { 1.0 } else { 0.0 };
+        assert_eq!(share, want, "{name}: share of photons emitted downward");
+    }
+
+    let n_max = 20_000;
+    let seed = common::seed(25_001);
+    let reference_count = floor_photons(&reference, n_max, seed);
+    assert!(reference_count > 1000, "{reference_count}");
+    for (name, scene) in [
+        ("mirrored in y", &mirrored),
+        ("mirrored in x", &mirrored_x),
+        ("rotated", &rotated),
+    ] {
+        // Two independent runs (other seeds) of the same expected count.
+        let count = floor_photons(scene, n_max, seed ^ 0x5eed);
+        let sigma = ((reference_count + count) as f64).sqrt();
+        common::assert_sigmas(
+            &format!("{name} floor photons against the reference"),
+            count as f64 - reference_count as f64,
+            sigma,
+            4.0,
+        );
+    }
+    assert_eq!(
+        floor_photons(&blender, n_max, seed),
+        0,
+        "a light facing away stores nothing on the floor"
+    );
+}
+
+#[test]
+fn a_mirrored_floor_keeps_its_normals_facing_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = Doc::default();
+    let (white, lamp) = (white(&mut doc), lamp(&mut doc, false));
+    // Authored facing down with down-pointing normals, mirrored in y.
+    let (p, i) = square(2.0, false);
+    let floor = doc.mesh(&p, &i, 4, Some(white));
+    let normals: Vec<u8> = (0..4)
+        .flat_map(|_| [0.0f32, -1.0, 0.0])
+        .flat_map(|c| c.to_le_bytes())
+        .collect();
+    let v = doc.view(&normals);
+    doc.accessors
+        .push(json!({"bufferView": v, "componentType": 5126, "count": 4, "type": "VEC3"}));
+    doc.meshes[floor]["primitives"][0]["attributes"]["NORMAL"] = json!(doc.accessors.len() - 1);
+    doc.node(json!({"mesh": floor, "scale": [1.0, -1.0, 1.0]}));
+    let (p, i) = square(0.25, false);
+    let light = doc.mesh(&p, &i, 4, Some(lamp));
+    doc.node(json!({"mesh": light, "translation": [0.0, 1.0, 0.0]}));
+    let s = Scene::load(doc.write(dir.path())).unwrap();
+    let m = &s.meshes()[0];
+    for t in 0..m.indices.len() {
+        let [a, b, c] = m.triangle(t);
+        assert!((b - a).cross(c - a).y > 0.0, "triangle {t} faces down");
+        assert!(m.shading_normal(t, 0.3, 0.3).unwrap().y > 0.999);
+    }
+    assert!(floor_photons(&s, 20_000, 3) > 1000);
+}
+
+#[test]
+fn a_double_sided_emitter_emits_from_both_faces_and_counts_both_in_its_power() {
+    let dir = tempfile::tempdir().unwrap();
+    let load = |double_sided: bool| {
+        let mut doc = Doc::default();
+        let (white, lamp) = (white(&mut doc), lamp(&mut doc, double_sided));
+        let (p, i) = square(2.0, true);
+        let floor = doc.mesh(&p, &i, 4, Some(white));
+        doc.node(json!({ "mesh": floor }));
+        let (p, i) = square(0.25, false);
+        let light = doc.mesh(&p, &i, 4, Some(lamp));
+        doc.node(json!({"mesh": light, "translation": [0.0, 1.0, 0.0]}));
+        Scene::load(doc.write(dir.path())).unwrap()
+    };
+    let (one, two) = (load(false), load(true));
+    let (Light::Area(a1), Light::Area(a2)) = (&one.lights()[0], &two.lights()[0]) else {
+        panic!("area lights")
+    };
+    assert!(!a1.emission.two_sided && a2.emission.two_sided);
+    // Area 0.25, radiance 1, diffuse: pi * 0.25 a face.
+    let face = std::f32::consts::PI * 0.25;
+    assert!((a1.power().x - face).abs() < 1e-5, "{}", a1.power());
+    assert!((a2.power().x - 2.0 * face).abs() < 1e-5, "{}", a2.power());
+
+    assert_eq!(downward_share(&one, 10_000, 2), 1.0);
+    let n = 100_000;
+    let share = downward_share(&two, n, common::seed(25_002));
+    common::assert_sigmas(
+        "share of a two-sided light's photons emitted down",
+        share - 0.5,
+        (0.25 / n as f64).sqrt(),
+        4.0,
+    );
+
+    // Radiance leaves the back of a two-sided emitter only.
+    let (e1, e2) = (a1.emission, a2.emission);
+    assert_eq!(e1.radiance_at(-0.5), Vec3::ZERO);
+    assert_eq!(e2.radiance_at(-0.5), e2.radiance_at(0.5));
+    assert_eq!(e1.radiance_at(0.5), e2.radiance_at(0.5));
+}
+
+#[test]
+fn strips_and_fans_are_the_triangles_of_the_list() {
+    let dir = tempfile::tempdir().unwrap();
+    let load = |indices: &[u32], mode: u32| {
+        let mut doc = Doc::default();
+        let lamp = lamp(&mut doc, false);
+        let (p, _) = square(1.0, false);
+        let m = doc.mesh(&p, indices, mode, Some(lamp));
+        doc.node(json!({ "mesh": m }));
+        Scene::load(doc.write(dir.path())).unwrap()
+    };
+    let list = load(&[0, 1, 2, 0, 2, 3], 4);
+    // A strip 0, 1, 3, 2 makes (0, 1, 3) and (1, 2, 3) once its second is
+    // rewound; a fan around 0 makes (1, 2, 0) and (2, 3, 0). Both face down,
+    // like the list.
+    for (name, scene) in [
+        ("strip", load(&[0, 1, 3, 2], 5)),
+        ("fan", load(&[0, 1, 2, 3], 6)),
+    ] {
+        let m = &scene.meshes()[0];
+        assert_eq!(m.indices.len(), 2, "{name}");
+        assert!((m.area() - list.meshes()[0].area()).abs() < 1e-6, "{name}");
+        for t in 0..2 {
+            let [a, b, c] = m.triangle(t);
+            assert!((b - a).cross(c - a).y < 0.0, "{name} triangle {t} faces up");
+        }
+        assert_eq!(
+            scene.lights()[0].power(),
+            list.lights()[0].power(),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn points_and_lines_beside_triangles_are_skipped_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = Doc::default();
+    let lamp = lamp(&mut doc, false);
+    let (p, i) = square(1.0, false);
+    let line = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]];
+    let m = doc.primitives(&[
+        (&p, &i, 4, Some(lamp)),
+        (&line, &[0, 1], 1, None),
+        (&line, &[0, 1], 0, None),
+    ]);
+    doc.meshes[m]["name"] = json!("helpers");
+    doc.node(json!({ "mesh": m }));
+    let s = Scene::load(doc.write(dir.path())).unwrap();
+    assert_eq!(s.triangle_count(), 2);
+    assert_eq!(s.warnings().len(), 2, "{:?}", s.warnings());
+    for (w, mode) in s.warnings().iter().zip(["Lines", "Points"]) {
+        assert!(
+            w.contains("`helpers`") && w.contains(mode) && w.contains("skipped"),
+            "{w}"
+        );
+    }
+}
+
+#[test]
+fn a_primitive_without_material_gets_the_specifications_white_rough_metal() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut doc = Doc::default();
+    let lamp = lamp(&mut doc, false);
+    let (p, i) = square(2.0, true);
+    let floor = doc.mesh(&p, &i, 4, None);
+    doc.node(json!({ "mesh": floor }));
+    let (p, i) = square(0.25, false);
+    let light = doc.mesh(&p, &i, 4, Some(lamp));
+    doc.node(json!({"mesh": light, "translation": [0.0, 1.0, 0.0]}));
+    let s = Scene::load(doc.write(dir.path())).unwrap();
+    let m = &s.materials()[s.meshes()[0].material];
+    assert_eq!(m.name, "default");
+    let want = adaptive_pm::brdf::gltf_map::from_gltf_material(
+        &adaptive_pm::brdf::gltf_map::GltfMaterial::new(Vec3::ONE, 1.0, 1.0),
+    )
+    .unwrap();
+    assert_eq!(m.brdf, want);
+    assert!(!matches!(m.brdf, Brdf::Lambert(_)), "{:?}", m.brdf);
+}
+
+/// What the Khronos validator calls invalid, and the loader used to accept.
+#[test]
+fn files_the_khronos_validator_calls_invalid_are_refused_with_a_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = || {
+        let mut doc = Doc::default();
+        let lamp = lamp(&mut doc, false);
+        let (p, i) = square(1.0, false);
+        doc.mesh(&p, &i, 4, Some(lamp));
+        doc
+    };
+    let write = |doc: &Doc, edit: &dyn Fn(&mut Value)| {
+        let path = doc.write(dir.path());
+        let mut v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        edit(&mut v);
+        std::fs::write(&path, v.to_string()).unwrap();
+        Scene::load(&path)
+    };
+    let mut one = base();
+    one.node(json!({"mesh": 0}));
+    assert!(write(&one, &|_| {}).is_ok());
+    let mut two = base();
+    two.node(json!({"mesh": 0}));
+    two.node(json!({"children": [0]}));
+    two.node(json!({"children": [0]}));
+    let cases: Vec<Case> = vec![
+        (
+            "projective matrix",
+            &one,
+            Box::new(|v| {
+                v["nodes"][0]["matrix"] = json!([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0])
+            }),
+            "bottom row",
+        ),
+        (
+            "sheared matrix",
+            &one,
+            Box::new(|v| {
+                v["nodes"][0]["matrix"] = json!([1, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1])
+            }),
+            "sheared",
+        ),
+        (
+            "matrix and TRS",
+            &one,
+            Box::new(|v| {
+                v["nodes"][0]["matrix"] = json!([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
+                v["nodes"][0]["scale"] = json!([2, 2, 2]);
+            }),
+            "both a matrix",
+        ),
+        (
+            "a root listed twice",
+            &one,
+            Box::new(|v| v["scenes"][0]["nodes"] = json!([0, 0])),
+            "twice among its roots",
+        ),
+        (
+            "a node under two parents",
+            &two,
+            Box::new(|v| v["scenes"][0]["nodes"] = json!([1, 2])),
+            "child of both",
+        ),
+        (
+            "a root that is a child",
+            &two,
+            Box::new(|v| {
+                v["nodes"][2].as_object_mut().unwrap().remove("children");
+                v["scenes"][0]["nodes"] = json!([0, 1]);
+            }),
+            "as a root, but it is a child",
+        ),
+        (
+            "POSITION without bounds",
+            &one,
+            Box::new(|v| {
+                v["accessors"][0].as_object_mut().unwrap().remove("min");
+            }),
+            "no min and max",
+        ),
+        (
+            "a camera of aspect ratio 0",
+            &one,
+            Box::new(|v| {
+                v["cameras"] = json!([{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1, "aspectRatio": 0.0}}]);
+                v["nodes"][0]["camera"] = json!(0);
+            }),
+            "aspectRatio 0",
+        ),
+        (
+            "a point light of range 0",
+            &one,
+            Box::new(|v| {
+                v["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+                v["extensions"] = json!({"KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 1.0, "range": 0.0}]}});
+                v["nodes"][0]["extensions"] = json!({"KHR_lights_punctual": {"light": 0}});
+            }),
+            "range 0",
+        ),
+    ];
+    for (name, doc, edit, says) in cases {
+        match write(doc, &*edit) {
+            Ok(_) => panic!("{name}: accepted"),
+            Err(e) => assert!(e.to_string().contains(says), "{name}: {e}"),
+        }
+    }
+}
