@@ -22,6 +22,7 @@ mod engine;
 mod glass_transport;
 mod gltf_conformance;
 mod gltf_glass;
+mod gltf_validator;
 mod hostile;
 mod hostile_values;
 mod isa_pinning;
