@@ -16,24 +16,28 @@ pkgs = {p["id"]: p for p in meta["packages"]}
 nodes = {n["id"]: n for n in meta["resolve"]["nodes"]}
 members = set(meta["workspace_members"])
 
-# Walk normal and build edges from the members: what a user of the crates compiles.
-seen, todo = set(), list(members)
-while todo:
-    pid = todo.pop()
-    if pid in seen:
-        continue
-    seen.add(pid)
-    for d in nodes[pid]["deps"]:
-        if any(k["kind"] in (None, "build") for k in d["dep_kinds"]):
-            todo.append(d["pkg"])
+# Walk normal and build edges from each member: what a user of that crate
+# compiles. Each member's floor is its own dependencies' (the bench crate's
+# criterion and kiddo do not raise the library's).
+def closure(root):
+    seen, todo = set(), [root]
+    while todo:
+        pid = todo.pop()
+        if pid in seen:
+            continue
+        seen.add(pid)
+        for d in nodes[pid]["deps"]:
+            if any(k["kind"] in (None, "build") for k in d["dep_kinds"]):
+                todo.append(d["pkg"])
+    return [pkgs[i] for i in seen - members]
 
-deps = [pkgs[i] for i in seen - members]
-floor = max((ver(p.get("rust_version")) for p in deps), default=(0, 0, 0))
-setters = sorted(f"{p['name']} {p['version']}" for p in deps if p.get("rust_version") and ver(p["rust_version"]) == floor)
-print(f"check-msrv: {len(deps)} dependencies; the highest rust-version among them is {'.'.join(map(str, floor))} ({', '.join(setters)})")
 bad = False
 for pid in sorted(members):
     p = pkgs[pid]
+    deps = closure(pid)
+    floor = max((ver(d.get("rust_version")) for d in deps), default=(0, 0, 0))
+    setters = sorted(f"{d['name']} {d['version']}" for d in deps if d.get("rust_version") and ver(d["rust_version"]) == floor)
+    print(f"check-msrv: {p['name']}: {len(deps)} dependencies; the highest rust-version among them is {'.'.join(map(str, floor))} ({', '.join(setters)})")
     declared = p.get("rust_version")
     if declared is None or ver(declared) < floor:
         print(f"check-msrv: {p['name']} declares rust-version {declared}, below its dependencies' {'.'.join(map(str, floor))}", file=sys.stderr)
