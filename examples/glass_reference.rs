@@ -16,12 +16,12 @@
 
 use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
-use adaptive_pm::render::study::caustic_pixels;
+use adaptive_pm::experiments::render_study::caustic_pixels;
 use adaptive_pm::render::{
     light_pixels, mean_bias, relative_rmse_masked, render, render_path, Image, PathHalves,
     PathPart, RenderConfig,
 };
-use adaptive_pm::scene::{PreparedScene, Scene};
+use adaptive_pm::scene::Scene;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -38,14 +38,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(&dir)?;
     let scene = Scene::open("cornell-glass")?;
     let device = Device::new()?;
-    let rt = scene.embree_geometry(&device)?;
+    let tracer = Tracer::new(scene.commit(&device)?);
+    let prepared = tracer.prepared();
 
     let mut base = RenderConfig::new(size, size);
     base.show_emitters = false;
-    let keep: Vec<bool> = light_pixels(&scene, &rt, &base)?
-        .iter()
-        .map(|l| !l)
-        .collect();
+    let keep: Vec<bool> = light_pixels(prepared, &base)?.iter().map(|l| !l).collect();
 
     // The reference's halves, from the cache or rendered now.
     let mut rc = base.clone();
@@ -64,9 +62,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     eprint!("\rreference: {done}/{total} rows");
                 }
             };
-            let a = render_path(&scene, &rt, &rc, PathPart::Full, &progress)?;
+            let a = render_path(prepared, &rc, PathPart::Full, &progress)?;
             rc.seed ^= 0xB;
-            let b = render_path(&scene, &rt, &rc, PathPart::Full, &progress)?;
+            let b = render_path(prepared, &rc, PathPart::Full, &progress)?;
             eprintln!(
                 "\rreference: {ref_spp} spp in {:.1} s",
                 t.elapsed().as_secs_f64()
@@ -84,17 +82,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let reference = halves.mean();
     let noise = halves.noise_rel(Some(&keep));
 
-    let caustic_mask = caustic_pixels(&scene, &rt, &base, ref_spp / 8, &reference, &keep)?;
+    let caustic_mask = caustic_pixels(prepared, &base, ref_spp / 8, &reference, &keep)?;
     let caustic_noise = halves.noise_rel(Some(&caustic_mask));
 
     let t = Instant::now();
-    let out = Tracer::new(PreparedScene::new(scene.clone(), &rt)?)
-        .trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(n_max)))?;
+    let out = tracer.trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(n_max)))?;
     let mut pc = base.clone();
     pc.spp = spp;
     pc.caustic_k = caustic_k;
     let maps = pc.build_maps(out.photons, out.frame);
-    let img = render(&scene, &rt, Some(&maps), &pc, &|_, _| {})?;
+    let img = render(prepared, Some(&maps), &pc, &|_, _| {})?;
     let photon_s = t.elapsed().as_secs_f64();
 
     // The images, to look at (the photon render's name carries its settings).

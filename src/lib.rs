@@ -165,7 +165,6 @@ pub mod photon_file;
 pub mod photon_map;
 pub mod prelude;
 pub mod raycast;
-#[cfg(feature = "embree")]
 pub mod render;
 pub mod rng;
 pub mod sampling;

@@ -3,13 +3,10 @@
 //! TILE.exr... --out IMG.exr` stacks the tiles back into the whole image,
 //! refusing tiles of different images, overlaps and gaps.
 
-use adaptive_pm::engine::Shard;
 use adaptive_pm::output::{check_target, refuse_overwrite};
-use adaptive_pm::photon_file::AtomicOutput;
 use adaptive_pm::render::image::check_dimensions;
 use adaptive_pm::render::{ExrFile, Image, MAX_DIMENSION};
 use anyhow::{bail, Context};
-use exr::prelude::*;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
@@ -22,42 +19,6 @@ pub struct AssembleArgs {
     /// The whole image (OpenEXR).
     #[arg(long)]
     pub out: PathBuf,
-}
-
-/// Rows `start..end` of a `height`-row image that tile `t` renders.
-pub fn tile_rows(t: Shard, height: u32) -> (u32, u32) {
-    let r = t.range(height as u64);
-    (r.start as u32, r.end as u32)
-}
-
-/// Writes `image` (rows `y0..` of a `width x full_height` image) as an EXR
-/// whose data window sits at row `y0` of the display window.
-pub fn write_tile(image: &Image, y0: u32, full_height: u32, path: &Path) -> anyhow::Result<()> {
-    let w = image.width as usize;
-    let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
-        let p = image.pixels[y * w + x];
-        (p.x, p.y, p.z)
-    });
-    let attrs = LayerAttributes {
-        layer_position: Vec2(0, y0 as i32),
-        ..LayerAttributes::default()
-    };
-    let layer = Layer::new(
-        (w, image.height as usize),
-        attrs,
-        Encoding::FAST_LOSSLESS,
-        channels,
-    );
-    let mut img = exr::image::Image::from_layer(layer);
-    img.attributes.display_window =
-        IntegerBounds::new((0, 0), (image.width as usize, full_height as usize));
-    let mut out = AtomicOutput::create(path)?;
-    let file = std::io::BufWriter::new(out.file());
-    img.write()
-        .to_buffered(file)
-        .with_context(|| format!("writing {}", path.display()))?;
-    out.finish()?;
-    Ok(())
 }
 
 /// Where a tile's rows sit in its image, from its header alone.

@@ -2,17 +2,18 @@
 //! trace photons, build the maps, render an image (see `adaptive_pm::render`).
 
 use super::common::{open_scene, progress_bar, BudgetArgs, EmbreeArgs, ThreadArgs};
-use adaptive_pm::engine::{Mode, Tracer};
+use adaptive_pm::embree::EmbreeScene;
+use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
 use adaptive_pm::output::refuse_overwrite;
 use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
-    cache::DEFAULT_STRIDE, check_output_path, render_with, Image, Integrator, RenderConfig,
-    RenderMaps, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
+    cache::DEFAULT_STRIDE, check_output_path, render_with, tile_rows, Image, Integrator,
+    RenderConfig, RenderMaps, RenderStats, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
 };
-use adaptive_pm::scene::PreparedScene;
 use anyhow::Context;
 use serde_json::json;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Arguments of `render`.
@@ -95,78 +96,28 @@ pub struct RenderArgs {
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let scene = open_scene(&args.scene, args.budget.cosn)?;
     let trace_cfg = args.budget.config(args.mode)?;
-    let view = if args.direct_only {
-        View::DirectOnly
-    } else if args.visualize_map {
-        View::Map {
-            primary_only: args.primary_only,
-        }
-    } else {
-        View::Full
-    };
-    let mut cfg = RenderConfig::new(args.width, args.height);
-    cfg.spp = args.spp;
-    cfg.final_gather = args.final_gather;
-    cfg.light_samples = args.light_samples;
-    cfg.cache_stride = args.cache_stride;
-    cfg.k = args.k;
-    cfg.caustic_k = args.caustic_k;
-    cfg.caustic_max_radius = args.caustic_radius;
-    cfg.view = view;
-    cfg.seed = args.budget.seed;
-    cfg.rows = args
-        .tile
-        .map(|t| super::assemble::tile_rows(t, args.height));
-    // Fail before any work: bad sizes, a missing folder, an unwritable path.
-    cfg.validate()?;
-    check_output_path(&args.out)?;
-    if let Some(p) = &args.png {
-        check_output_path(p)?;
-    }
-    // No output may replace an input or the other output, however spelled.
-    // (A built-in scene's name is no file.)
-    let scene_path = Path::new(&args.scene);
-    let mut inputs: Vec<&Path> = Vec::new();
-    inputs.extend(Some(scene_path).filter(|p| p.exists()));
-    inputs.extend(args.map.as_deref());
-    refuse_overwrite(&args.out, &inputs).context("--out")?;
-    if let Some(p) = &args.png {
-        inputs.push(&args.out);
-        refuse_overwrite(p, &inputs).context("--png")?;
-    }
+    let cfg = render_config(&args)?;
+    check_outputs(&args)?;
     let pool = args.threads.pool()?;
     let device = args.embree.device()?;
-    let rt = scene.embree_geometry(&device)?;
-    let bar = progress_bar(!args.json);
+    let prepared = Arc::new(scene.commit(&device)?);
     if args.integrator == Integrator::Path {
-        return super::render_path::run_path(&args, &scene, &rt, &cfg, &pool);
+        return super::render_path::run_path(&args, &prepared, &cfg, &pool);
     }
-    let (maps, trace_s, photons): (Option<RenderMaps>, f64, usize) = if view == View::DirectOnly {
+    let bar = progress_bar(!args.json);
+    let (maps, trace_s, photons) = if cfg.view == View::DirectOnly {
         (None, 0.0, 0)
-    } else if let Some(path) = &args.map {
-        let t = Instant::now();
-        let (h, maps) = pool.install(|| read_render_maps(path, &scene))?;
-        (Some(maps), t.elapsed().as_secs_f64(), h.photons as usize)
     } else {
-        let t = Instant::now();
-        let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt)?);
-        let out = pool.install(|| {
-            tracer.trace_with_progress(&trace_cfg, &|p| {
-                bar.set_length(p.total);
-                bar.set_position(p.done);
-                bar.set_message(format!("depth {}", p.depth));
-            })
-        })?;
-        let stored = out.photons.len();
-        let maps = pool.install(|| cfg.build_maps(out.photons, out.frame));
-        (Some(maps), t.elapsed().as_secs_f64(), stored)
+        let (maps, trace_s, photons) =
+            photon_maps(&args, &prepared, &trace_cfg, &cfg, &pool, &bar)?;
+        (Some(maps), trace_s, photons)
     };
     bar.set_position(0);
     bar.set_length(args.height as u64);
     bar.set_message("render");
     let t = Instant::now();
     let (image, stats) = pool.install(|| {
-        render_with(&scene, &rt, maps.as_ref(), None, &cfg, &|done, _| {
+        render_with(&*prepared, maps.as_ref(), None, &cfg, &|done, _| {
             bar.set_position(done)
         })
     })?;
@@ -182,16 +133,114 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             },
         )?;
     }
+    let times = Times {
+        trace_s,
+        map_build_s: maps.as_ref().map_or(0.0, |m| m.build_total_s()),
+        render_s,
+    };
+    report(&args, &cfg, &image, &stats, photons, &times);
+    Ok(())
+}
+
+/// The render settings the arguments ask for, checked.
+fn render_config(args: &RenderArgs) -> anyhow::Result<RenderConfig> {
+    let mut cfg = RenderConfig::new(args.width, args.height);
+    cfg.spp = args.spp;
+    cfg.final_gather = args.final_gather;
+    cfg.light_samples = args.light_samples;
+    cfg.cache_stride = args.cache_stride;
+    cfg.k = args.k;
+    cfg.caustic_k = args.caustic_k;
+    cfg.caustic_max_radius = args.caustic_radius;
+    cfg.view = if args.direct_only {
+        View::DirectOnly
+    } else if args.visualize_map {
+        View::Map {
+            primary_only: args.primary_only,
+        }
+    } else {
+        View::Full
+    };
+    cfg.seed = args.budget.seed;
+    cfg.rows = args.tile.map(|t| tile_rows(t, args.height));
+    // Fail before any work: bad sizes.
+    cfg.validate()?;
+    Ok(cfg)
+}
+
+/// Fails before any work on a missing folder, an unwritable path, or an
+/// output that would replace an input or the other output, however spelled
+/// (a built-in scene's name is no file).
+fn check_outputs(args: &RenderArgs) -> anyhow::Result<()> {
+    check_output_path(&args.out)?;
+    if let Some(p) = &args.png {
+        check_output_path(p)?;
+    }
+    let scene_path = Path::new(&args.scene);
+    let mut inputs: Vec<&Path> = Vec::new();
+    inputs.extend(Some(scene_path).filter(|p| p.exists()));
+    inputs.extend(args.map.as_deref());
+    refuse_overwrite(&args.out, &inputs).context("--out")?;
+    if let Some(p) = &args.png {
+        inputs.push(&args.out);
+        refuse_overwrite(p, &inputs).context("--png")?;
+    }
+    Ok(())
+}
+
+/// The maps to render from, read from `--map` or traced now, with the
+/// seconds that took and the photons stored.
+fn photon_maps(
+    args: &RenderArgs,
+    prepared: &Arc<EmbreeScene>,
+    trace_cfg: &TraceConfig,
+    cfg: &RenderConfig,
+    pool: &rayon::ThreadPool,
+    bar: &indicatif::ProgressBar,
+) -> anyhow::Result<(RenderMaps, f64, usize)> {
+    let t = Instant::now();
+    if let Some(path) = &args.map {
+        let (h, maps) = pool.install(|| read_render_maps(path, prepared.scene()))?;
+        return Ok((maps, t.elapsed().as_secs_f64(), h.photons as usize));
+    }
+    let tracer = Tracer::new(Arc::clone(prepared));
+    let out = pool.install(|| {
+        tracer.trace_with_progress(trace_cfg, &|p| {
+            bar.set_length(p.total);
+            bar.set_position(p.done);
+            bar.set_message(format!("depth {}", p.depth));
+        })
+    })?;
+    let stored = out.photons.len();
+    let maps = pool.install(|| cfg.build_maps(out.photons, out.frame));
+    Ok((maps, t.elapsed().as_secs_f64(), stored))
+}
+
+/// Seconds spent in each stage of a render.
+struct Times {
+    trace_s: f64,
+    map_build_s: f64,
+    render_s: f64,
+}
+
+/// Prints what the render did: one JSON object, or lines of text.
+fn report(
+    args: &RenderArgs,
+    cfg: &RenderConfig,
+    image: &Image,
+    stats: &RenderStats,
+    photons: usize,
+    times: &Times,
+) {
     let mean = image.mean();
-    let map_build_s = maps.as_ref().map_or(0.0, |m| m.build_total_s());
-    let samples_per_s = stats.samples as f64 / render_s.max(1e-9);
+    let samples_per_s = stats.samples as f64 / times.render_s.max(1e-9);
     if args.json {
         println!(
             "{}",
             json!({
                 "scene": args.scene,
                 "mode": args.mode.name(),
-                "view": format!("{view:?}"),
+                "view": format!("{:?}", cfg.view),
                 "width": args.width,
                 "height": args.height,
                 "spp": args.spp,
@@ -200,9 +249,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 "cache_stride": args.cache_stride,
                 "k": args.k,
                 "photons": photons,
-                "trace_s": trace_s,
-                "map_build_s": map_build_s,
-                "render_s": render_s,
+                "trace_s": times.trace_s,
+                "map_build_s": times.map_build_s,
+                "render_s": times.render_s,
                 "samples_per_s": samples_per_s,
                 "lookup_s": stats.lookup_s,
                 "cache_build_s": stats.cache_build_s,
@@ -214,34 +263,36 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 "out": args.out,
             })
         );
-    } else {
-        println!(
-            "{} on {}: {} photons, trace + kd-trees {:.3} s, render {:.3} s ({}x{}, {} spp, gather {})",
-            args.mode.name(),
-            args.scene,
-            photons,
-            trace_s,
-            render_s,
-            args.width,
-            args.height,
-            args.spp,
-            args.final_gather
-        );
-        let (cache_n, cache_s) = (stats.cache_entries, stats.cache_build_s);
-        println!("{samples_per_s:.0} samples/s, lookups {:.3} s (thread sum), cache {cache_n} cells built in {cache_s:.3} s", stats.lookup_s);
-        println!("mean RGB {:.4} {:.4} {:.4}", mean.x, mean.y, mean.z);
-        println!("wrote {}", args.out.display());
-        if let Some(p) = &args.png {
-            println!("wrote {}", p.display());
-        }
+        return;
     }
-    Ok(())
+    println!(
+        "{} on {}: {} photons, trace + kd-trees {:.3} s, render {:.3} s ({}x{}, {} spp, gather {})",
+        args.mode.name(),
+        args.scene,
+        photons,
+        times.trace_s,
+        times.render_s,
+        args.width,
+        args.height,
+        args.spp,
+        args.final_gather
+    );
+    let (cache_n, cache_s) = (stats.cache_entries, stats.cache_build_s);
+    println!(
+        "{samples_per_s:.0} samples/s, lookups {:.3} s (thread sum), cache {cache_n} cells built in {cache_s:.3} s",
+        stats.lookup_s
+    );
+    println!("mean RGB {:.4} {:.4} {:.4}", mean.x, mean.y, mean.z);
+    println!("wrote {}", args.out.display());
+    if let Some(p) = &args.png {
+        println!("wrote {}", p.display());
+    }
 }
 
 /// Writes the EXR: a tile of the whole image (`--tile`) or the whole image.
 pub fn write_image(image: &Image, cfg: &RenderConfig, args: &RenderArgs) -> anyhow::Result<()> {
     match (args.tile, cfg.rows) {
-        (Some(_), Some((y0, _))) => super::assemble::write_tile(image, y0, args.height, &args.out)?,
+        (Some(_), Some((y0, _))) => image.write_exr_tile(y0, args.height, &args.out)?,
         _ => image.write_exr(&args.out)?,
     }
     Ok(())

@@ -7,8 +7,7 @@ use std::time::Instant;
 /// `--integrator path`: the image from two independent halves, and its noise.
 pub fn run_path(
     args: &super::render::RenderArgs,
-    scene: &adaptive_pm::scene::Scene,
-    rt: &adaptive_pm::embree::CommittedScene,
+    prepared: &adaptive_pm::embree::EmbreeScene,
     cfg: &RenderConfig,
     pool: &rayon::ThreadPool,
 ) -> anyhow::Result<()> {
@@ -21,7 +20,7 @@ pub fn run_path(
     let (image, dropped) = if cfg.spp >= 2 {
         let mut half = cfg.clone();
         half.spp = cfg.spp / 2;
-        let h = pool.install(|| PathHalves::render(scene, rt, &half, part))?;
+        let h = pool.install(|| PathHalves::render(prepared, &half, part))?;
         let noise = h.noise_rel(None);
         eprintln!(
             "path tracer noise (two halves): {:.3} % rms of the mean",
@@ -29,7 +28,7 @@ pub fn run_path(
         );
         (h.mean(), h.dropped_samples)
     } else {
-        let (image, stats) = pool.install(|| render_path_with(scene, rt, cfg, part, &|_, _| {}))?;
+        let (image, stats) = pool.install(|| render_path_with(prepared, cfg, part, &|_, _| {}))?;
         (image, stats.dropped_samples)
     };
     let secs = t.elapsed().as_secs_f64();

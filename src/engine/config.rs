@@ -21,7 +21,7 @@ pub const DENSITY_CONTROL_K: usize = 20;
 
 /// The three ways of tracing compared in every experiment (docs/method.md,
 /// "The three modes").
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Mode {
     /// Markov chains: `N_MAX` photons shared by power, Russian roulette, no splitting.
@@ -46,6 +46,13 @@ impl Mode {
     }
 }
 
+impl std::fmt::Display for Mode {
+    /// [`Mode::name`]: what `FromStr` parses back.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl std::str::FromStr for Mode {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
@@ -61,6 +68,9 @@ impl std::str::FromStr for Mode {
     }
 }
 
+/// `N_MAX` of the paper's experiments, and the default budget.
+pub const PAPER_N_MAX: u64 = 100_000;
+
 /// The photon budget: the quality knob or `N_MAX` itself.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Budget {
@@ -68,6 +78,13 @@ pub enum Budget {
     Quality(f64),
     /// `N_MAX` directly (the paper's experiments use 100 000).
     NMax(u64),
+}
+
+impl Default for Budget {
+    /// [`PAPER_N_MAX`] photons.
+    fn default() -> Self {
+        Budget::NMax(PAPER_N_MAX)
+    }
 }
 
 impl Budget {
@@ -126,6 +143,14 @@ pub struct TraceConfig {
     pub batch: usize,
     /// Which emitted photons to trace (the whole run by default).
     pub shard: Shard,
+}
+
+impl Default for TraceConfig {
+    /// The paper's adaptive mode with [`PAPER_N_MAX`] photons, every other
+    /// setting at its default.
+    fn default() -> Self {
+        TraceConfig::new(Mode::Adaptive, Budget::default())
+    }
 }
 
 impl TraceConfig {

@@ -23,7 +23,7 @@ pub const DENSITY_POINTS_SEED: u64 = 0xDE45_1717;
 
 /// The one map set of a run (the density measurements and the renderer read
 /// it), with build times.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Maps {
     /// All stored photons (the renderer's gather reads it at secondary hits).
     pub full: PhotonMap,

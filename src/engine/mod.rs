@@ -29,7 +29,7 @@ pub mod tracer;
 pub mod wave;
 
 pub use buffer::{map_frame, POWER_HEADROOM};
-pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig};
+pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig, PAPER_N_MAX};
 pub use measure::{measure, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};
 pub use shard::Shard;

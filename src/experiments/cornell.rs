@@ -107,7 +107,7 @@ impl CornellConfig {
         CornellConfig {
             scene: crate::scene::BUILTIN_CORNELL_EMPTY.to_string(),
             n_values: (1..=200).map(f64::from).collect(),
-            n_max: 100_000,
+            n_max: crate::engine::config::PAPER_N_MAX,
             modes: Mode::ALL.to_vec(),
             seed: 1,
             estimator: Estimator::Paper,

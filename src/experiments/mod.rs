@@ -1,7 +1,9 @@
 //! The paper's experiments reproduced (docs/method.md, "The experiments"):
 //! the Cornell sweep ([`cornell::run_cornell`]), its output files and figures
 //! ([`output::write_outputs`]) and the paper's claims checked against it
-//! ([`claims::check_claims`]).
+//! ([`claims::check_claims`]); the renderer against the path tracer at
+//! equal error ([`render_study`], `bench render`); the trade study
+//! ([`tradeoff`]).
 //!
 //! ```no_run
 //! use adaptive_pm::experiments::{cornell, output, sweep};
@@ -19,5 +21,6 @@ pub mod claims;
 pub mod cornell;
 pub mod output;
 pub mod plot;
+pub mod render_study;
 pub mod sweep;
 pub mod tradeoff;

@@ -20,12 +20,12 @@
 //! light the same times its falloff.
 
 use crate::brdf::Brdf;
-use crate::embree::{CommittedScene, Ray};
+use crate::raycast::{Ray, RayCaster};
 use crate::sampling::{luminance, uniform_triangle, Frame};
-use crate::scene::{Light, Scene};
+use crate::scene::{Light, PreparedScene, Scene};
 use glam::Vec3;
 
-pub use super::quadrature::{floor_points, quadrature_irradiance};
+pub use super::quadrature::{floor_points, quadrature_irradiance, unshadowed_irradiance};
 
 /// Shadow rays stop this fraction of their length short of either end.
 pub(crate) const SHADOW_EPS: f32 = 1e-4;
@@ -47,13 +47,19 @@ struct LightTable {
 #[allow(missing_debug_implementations)] // it borrows the scene and holds per-light tables: nothing useful to print
 pub struct LightSampler<'a> {
     scene: &'a Scene,
+    rt: &'a dyn RayCaster,
     tables: Vec<LightTable>,
     total_power: f32,
 }
 
 impl<'a> LightSampler<'a> {
-    /// Tables of every light of `scene`.
-    pub fn new(scene: &'a Scene) -> Self {
+    /// Tables of every light of the scene of `prepared`, whose caster traces
+    /// the shadow rays.
+    pub fn new<C: RayCaster>(prepared: &'a PreparedScene<C>) -> Self {
+        Self::over(prepared.scene(), prepared.caster())
+    }
+
+    pub(super) fn over(scene: &'a Scene, rt: &'a dyn RayCaster) -> Self {
         let tables: Vec<LightTable> = scene
             .lights
             .iter()
@@ -97,6 +103,7 @@ impl<'a> LightSampler<'a> {
         let total_power = tables.iter().map(|t| t.power).sum();
         LightSampler {
             scene,
+            rt,
             tables,
             total_power,
         }
@@ -114,8 +121,7 @@ impl<'a> LightSampler<'a> {
         match &self.scene.lights[i] {
             Light::Area(a) => {
                 let cos_l = a.emission.facing((-wi).dot(t.normal)).max(0.05);
-                let le = luminance(a.emission.radiance)
-                    * a.emission.profile.eval(Vec3::new(0.0, 0.0, cos_l));
+                let le = luminance(a.emission.radiance) * a.emission.profile_toward(cos_l);
                 le * cos_l * cos_x * a.area / r2.max(a.area)
             }
             Light::Point(p) => luminance(p.intensity) * cos_x / r2,
@@ -173,7 +179,7 @@ impl<'a> LightSampler<'a> {
                 if cos_l <= 0.0 {
                     return None;
                 }
-                let le = a.emission.radiance * a.emission.profile.eval(Vec3::new(0.0, 0.0, cos_l));
+                let le = a.emission.radiance_toward(cos_l);
                 Some((p, le * cos_l * a.area / r2))
             }
             light => punctual_arrival(light, x),
@@ -184,14 +190,7 @@ impl<'a> LightSampler<'a> {
     /// (world, unit) on the side of the unit geometric normal `ng`, shaded
     /// with the unit normal `n`: a light picked by contribution, a point on
     /// it from `u`, a shadow ray from `x + eps ng`.
-    pub fn sample(
-        &self,
-        rt: &CommittedScene,
-        brdf: &Brdf,
-        [x, ng, n, wo]: [Vec3; 4],
-        eps: f32,
-        u: [f32; 2],
-    ) -> Vec3 {
+    pub fn sample(&self, brdf: &Brdf, [x, ng, n, wo]: [Vec3; 4], eps: f32, u: [f32; 2]) -> Vec3 {
         let Some((i, prob, u0)) = self.pick(x, n, u[0]) else {
             return Vec3::ZERO;
         };
@@ -208,7 +207,7 @@ impl<'a> LightSampler<'a> {
         if f.max_element() <= 0.0 {
             return Vec3::ZERO;
         }
-        if rt.occluded(&Ray::segment(x + ng * eps, p, SHADOW_EPS)) {
+        if self.rt.occluded(&Ray::segment(x + ng * eps, p, SHADOW_EPS)) {
             return Vec3::ZERO;
         }
         f * le_g * (cos_x / prob)
@@ -252,8 +251,8 @@ mod tests {
     fn stratified_light_samples_match_the_quadrature() {
         let scene = Scene::cornell().unwrap();
         let device = Device::new().unwrap();
-        let rt = scene.embree_geometry(&device).unwrap();
-        let lights = LightSampler::new(&scene);
+        let prepared = scene.commit(&device).unwrap();
+        let lights = LightSampler::new(&prepared);
         let x = Vec3::new(278.0, 0.0, 279.0);
         let brdf: Brdf = Lambert::new(Vec3::splat(0.5)).unwrap().into();
         let s = PixelSampler::new(3);
@@ -261,10 +260,10 @@ mod tests {
         let mut sum = Vec3::ZERO;
         for i in 0..n {
             let u = s.get_2d(dim::LIGHT, i, n);
-            sum += lights.sample(&rt, &brdf, [x, Vec3::Y, Vec3::Y, Vec3::Y], 1e-3, u);
+            sum += lights.sample(&brdf, [x, Vec3::Y, Vec3::Y, Vec3::Y], 1e-3, u);
         }
         let got = sum.x / n as f32;
-        let e = quadrature_irradiance(&scene, Some(&rt), x, Vec3::Y, 32);
+        let e = quadrature_irradiance(&prepared, x, Vec3::Y, 32);
         let want = e.x * 0.5 / PI;
         assert!((got / want - 1.0).abs() < 0.01, "{got} vs {want}");
     }

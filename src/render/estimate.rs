@@ -38,6 +38,17 @@ pub struct Lookup {
     pub max_radius: f32,
 }
 
+impl Default for Lookup {
+    /// [`super::DEFAULT_K`] photons, however far they are (the renderer
+    /// bounds the radius by the scene's size: [`super::default_max_radius`]).
+    fn default() -> Self {
+        Lookup {
+            k: super::DEFAULT_K,
+            max_radius: f32::INFINITY,
+        }
+    }
+}
+
 /// Shared kernel: the facing neighbours of `x`, then [`cone_filter`].
 fn kernel_sum(
     map: &PhotonMap,

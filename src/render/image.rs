@@ -10,6 +10,7 @@
 //!   quarter of the available memory.
 
 use crate::engine::config::available_memory;
+use crate::engine::Shard;
 use crate::error::{Error, Result};
 use glam::Vec3;
 use std::path::Path;
@@ -154,6 +155,13 @@ impl Image {
     }
 }
 
+/// Rows `start..end` of a `height`-row image that tile `t` of a tiled
+/// render covers (bands of rows, as [`Shard::range`] splits them).
+pub fn tile_rows(t: Shard, height: u32) -> (u32, u32) {
+    let r = t.range(u64::from(height));
+    (r.start as u32, r.end as u32)
+}
+
 /// Image files: the `image-io` feature.
 #[cfg(feature = "image-io")]
 impl Image {
@@ -169,6 +177,36 @@ impl Image {
                 (p.x, p.y, p.z)
             })
             .map_err(exr_io)
+        })
+    }
+
+    /// Writes this image as rows `y0..` of a `width x full_height` image: an
+    /// OpenEXR file whose data window sits at row `y0` of the display window
+    /// (`render --tile`; `assemble` stacks such tiles back).
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the folder is missing or the file cannot be written.
+    pub fn write_exr_tile(&self, y0: u32, full_height: u32, path: impl AsRef<Path>) -> Result<()> {
+        use exr::prelude::*;
+        let w = self.width as usize;
+        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+            let p = self.pixels[y * w + x];
+            (p.x, p.y, p.z)
+        });
+        let attrs = LayerAttributes {
+            layer_position: Vec2(0, y0 as i32),
+            ..LayerAttributes::default()
+        };
+        let layer = Layer::new(
+            (w, self.height as usize),
+            attrs,
+            Encoding::FAST_LOSSLESS,
+            channels,
+        );
+        let mut img = exr::image::Image::from_layer(layer);
+        img.attributes.display_window = IntegerBounds::new((0, 0), (w, full_height as usize));
+        write_atomic(path.as_ref(), |tmp| {
+            img.write().to_file(tmp).map_err(exr_io)
         })
     }
 

@@ -1,6 +1,6 @@
 //! The per-sample estimator (see the module docs of [`super`]): each sample
 //! with its own counter-based random stream and the pixel's stratified
-//! points ([`super::sampler`]). The image loop is in [`super::run`].
+//! points ([`super::sampler`]). The image loop is in [`super::film`].
 
 use super::cache::IrradianceCache;
 use super::direct::LightSampler;
@@ -8,9 +8,9 @@ use super::estimate::{radiance_estimate, Lookup};
 use super::sampler::{dim, PixelSampler};
 use super::{RenderMaps, View, MAX_SPECULAR};
 use crate::brdf::{Brdf, Transport};
-use crate::embree::{CommittedScene, Hit, Ray};
 use crate::engine::albedo::AlbedoTable;
 use crate::photon_map::{Neighbor, PhotonMap};
+use crate::raycast::{Hit, Ray, RayCaster};
 use crate::rng::Rng;
 use crate::sampling::Frame;
 use crate::scene::{consistent_with_geometry, Material, Scene};
@@ -20,7 +20,7 @@ use std::time::Instant;
 
 pub(super) struct Ctx<'a> {
     pub(super) scene: &'a Scene,
-    pub(super) rt: &'a CommittedScene,
+    pub(super) rt: &'a dyn RayCaster,
     pub(super) maps: Option<&'a RenderMaps>,
     pub(super) cache: Option<&'a IrradianceCache>,
     pub(super) lights: LightSampler<'a>,
@@ -43,7 +43,7 @@ pub(super) struct Ctx<'a> {
 const LOOKUP_TIMING_STRIDE: u64 = 16;
 
 /// Per-thread scratch and counters.
-pub(super) struct Scratch {
+pub(super) struct SampleScratch {
     pub(super) neighbors: Vec<Neighbor>,
     pub(super) lookup_ns: u64,
     pub(super) lookups: u64,
@@ -51,9 +51,9 @@ pub(super) struct Scratch {
     pub(super) misses: u64,
 }
 
-impl Scratch {
+impl SampleScratch {
     pub(super) fn new(k: usize) -> Self {
-        Scratch {
+        SampleScratch {
             neighbors: Vec::with_capacity(k),
             lookup_ns: 0,
             lookups: 0,
@@ -177,7 +177,7 @@ impl<'a> Ctx<'a> {
         None
     }
 
-    fn estimate(&self, map: &PhotonMap, s: &SurfaceHit, sc: &mut Scratch) -> Vec3 {
+    fn estimate(&self, map: &PhotonMap, s: &SurfaceHit, sc: &mut SampleScratch) -> Vec3 {
         self.estimate_with(map, self.lookup, s, sc)
     }
 
@@ -186,7 +186,7 @@ impl<'a> Ctx<'a> {
         map: &PhotonMap,
         lookup: Lookup,
         s: &SurfaceHit,
-        sc: &mut Scratch,
+        sc: &mut SampleScratch,
     ) -> Vec3 {
         if map.is_empty() {
             return Vec3::ZERO;
@@ -216,7 +216,7 @@ impl<'a> Ctx<'a> {
         maps: &RenderMaps,
         y: &SurfaceHit,
         rng: &mut Rng,
-        sc: &mut Scratch,
+        sc: &mut SampleScratch,
     ) -> Vec3 {
         if let Some(cache) = self.cache {
             let t = sc.start_lookup();
@@ -244,7 +244,7 @@ impl<'a> Ctx<'a> {
         s: &SurfaceHit,
         (px, sample): (&PixelSampler, u32),
         rng: &mut Rng,
-        sc: &mut Scratch,
+        sc: &mut SampleScratch,
     ) -> Vec3 {
         let frame = Frame::from_normal(s.shading);
         let wo_l = frame.local_from_world(s.wo);
@@ -277,7 +277,6 @@ impl<'a> Ctx<'a> {
         for j in 0..l {
             let u = px.get_2d(dim::LIGHT, sample * l + j, self.spp * l);
             sum += self.lights.sample(
-                self.rt,
                 &s.material.brdf,
                 [s.position, s.normal, s.shading, s.wo],
                 self.eps,
@@ -292,7 +291,7 @@ impl<'a> Ctx<'a> {
         ray: Ray,
         px: (&PixelSampler, u32),
         rng: &mut Rng,
-        sc: &mut Scratch,
+        sc: &mut SampleScratch,
     ) -> Vec3 {
         let mut l = Vec3::ZERO;
         let first = if self.show_emitters { 0 } else { u32::MAX };

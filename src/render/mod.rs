@@ -2,20 +2,24 @@
 //! emitters, indirect light from the photon map, optional final gather, and
 //! the image files (OpenEXR, tone-mapped PNG).
 //!
+//! The renderer reads rays through the [`RayCaster`](crate::raycast::RayCaster)
+//! of a [`PreparedScene`](crate::scene::PreparedScene): Embree's (feature
+//! `embree`, below) or a renderer's own, with no feature at all.
+//!
 //! ```no_run
+//! # #[cfg(all(feature = "embree", feature = "gltf", feature = "image-io"))] {
 //! use adaptive_pm::embree::Device;
 //! use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 //! use adaptive_pm::render::{render, RenderConfig, RenderMaps};
-//! use adaptive_pm::scene::{PreparedScene, Scene};
+//! use adaptive_pm::scene::Scene;
 //!
-//! let scene = Scene::cornell()?;
-//! let device = Device::new()?;
-//! let rt = scene.embree_geometry(&device)?;
-//! let run = Tracer::new(PreparedScene::new(scene.clone(), &rt)?).trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000)))?;
+//! let tracer = Tracer::new(Scene::cornell()?.commit(&Device::new()?)?);
+//! let run = tracer.trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000)))?;
 //! let maps = RenderMaps::build(&run.records());
 //! let cfg = RenderConfig::new(64, 64);
-//! let image = render(&scene, &rt, Some(&maps), &cfg, &|_, _| {})?;
+//! let image = render(tracer.prepared(), Some(&maps), &cfg, &|_, _| {})?;
 //! image.write_exr("cornell.exr")?;
+//! # }
 //! # Ok::<(), adaptive_pm::Error>(())
 //! ```
 //!
@@ -64,9 +68,10 @@
 //! an image does not depend on the thread count or the tiling.
 //!
 //! # Rays
-//! Camera, shadow and gather rays go through
-//! [`crate::embree::CommittedScene::intersect`] /
-//! [`crate::embree::CommittedScene::occluded`] one at a time. The 16-wide
+//! Camera, shadow and gather rays go through the caster's
+//! [`intersect`](crate::raycast::RayCaster::intersect) /
+//! [`occluded`](crate::raycast::RayCaster::occluded) one at a time (with
+//! Embree, `rtcIntersect1` / `rtcOccluded1`). The 16-wide
 //! packets of the batched path gain at most ~10 % on coherent rays in scenes
 //! this small (`cargo bench --bench rays`: 14.5 vs 14.7 Mrays/s on the
 //! 12-triangle box, 8.9 vs 8.1 on the 49k one), while a sample spends most of
@@ -77,6 +82,7 @@ pub mod cache;
 mod camera;
 pub mod direct;
 pub mod estimate;
+mod film;
 pub mod image;
 mod integrator;
 pub mod metrics;
@@ -86,7 +92,6 @@ mod path_render;
 mod quadrature;
 mod run;
 pub mod sampler;
-pub mod study;
 
 pub use cache::{CacheConfig, IrradianceCache};
 pub use camera::CameraRays;
@@ -94,13 +99,13 @@ pub use direct::LightSampler;
 pub use estimate::{irradiance_default, irradiance_estimate, radiance_estimate, Estimate, Lookup};
 #[cfg(feature = "image-io")]
 pub use image::ExrFile;
-pub use image::{check_output_path, Image, ToneMap, MAX_DIMENSION};
+pub use image::{check_output_path, tile_rows, Image, ToneMap, MAX_DIMENSION};
 pub use metrics::{mean_bias, relative_rmse, relative_rmse_masked, rmse};
 pub use path::{Integrator, PathPart, PathTracer};
 pub use path_render::{
     indirect_irradiance, light_pixels, render_path, render_path_with, specular_pixels, PathHalves,
 };
-pub use quadrature::{floor_points, quadrature_irradiance};
+pub use quadrature::{floor_points, quadrature_irradiance, unshadowed_irradiance};
 pub use run::{render, render_with, RenderStats};
 
 use crate::error::{Error, Result};

@@ -37,11 +37,11 @@
 use super::path_light::{area_light_pdf, next_event};
 use super::ray_epsilon;
 use crate::brdf::Transport;
-use crate::embree::{CommittedScene, Ray};
 use crate::error::{Error, Result};
+use crate::raycast::{Ray, RayCaster};
 use crate::rng::Rng;
 use crate::sampling::Frame;
-use crate::scene::{consistent_with_geometry, Light, Scene};
+use crate::scene::{consistent_with_geometry, Light, PreparedScene, Scene};
 use glam::Vec3;
 
 /// Non-delta vertices before Russian roulette starts.
@@ -118,19 +118,23 @@ struct State {
     delta_since_x: bool,
 }
 
-/// The path tracer over one scene and its Embree geometry.
+/// The path tracer over one prepared scene, through its caster.
 #[allow(missing_debug_implementations)] // large images and borrowed scenes: nothing useful to print
 pub struct PathTracer<'a> {
     pub(super) scene: &'a Scene,
-    pub(super) rt: &'a CommittedScene,
+    pub(super) rt: &'a dyn RayCaster,
     pub(super) eps: f32,
     /// Light index of each mesh that is an area light.
     light_of_mesh: Vec<Option<usize>>,
 }
 
 impl<'a> PathTracer<'a> {
-    /// A path tracer of `scene`, whose committed geometry is `rt`.
-    pub fn new(scene: &'a Scene, rt: &'a CommittedScene) -> Self {
+    /// A path tracer of the scene of `prepared`, tracing with its caster.
+    pub fn new<C: RayCaster>(prepared: &'a PreparedScene<C>) -> Self {
+        Self::over(prepared.scene(), prepared.caster())
+    }
+
+    pub(super) fn over(scene: &'a Scene, rt: &'a dyn RayCaster) -> Self {
         let mut light_of_mesh = vec![None; scene.meshes.len()];
         for (i, l) in scene.lights.iter().enumerate() {
             if let Light::Area(a) = l {
@@ -210,7 +214,7 @@ impl<'a> PathTracer<'a> {
                     _ => Class::Indirect,
                 };
                 if cos_l > 0.0 && part.counts(class, show_emitters) {
-                    let le = e.radiance * e.profile.eval(Vec3::new(0.0, 0.0, cos_l));
+                    let le = e.radiance_toward(cos_l);
                     let w = match (prev, self.light_area(h.geom_id)) {
                         (Some((p, pdf_b)), Some(area)) => {
                             let pdf_l = area_light_pdf(p, pos, cos_l, area);

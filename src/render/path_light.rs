@@ -54,7 +54,7 @@ pub(super) fn next_event(
                 if cos_l <= 0.0 {
                     continue;
                 }
-                let le = a.emission.radiance * a.emission.profile.eval(Vec3::new(0.0, 0.0, cos_l));
+                let le = a.emission.radiance_toward(cos_l);
                 let pdf = area_light_pdf(x, e.origin, cos_l, a.area);
                 (e.origin, le / pdf, Some(pdf))
             }

@@ -8,36 +8,37 @@
 //! trade study compares with the errors it judges.
 
 use super::camera::CameraRays;
+use super::film::{self, PixelEstimator, Sample};
+use super::metrics::relative_rmse_masked;
 use super::path::{PathPart, PathTracer};
-use super::run::{pixel_mean, RenderStats};
+use super::run::RenderStats;
 use super::{Image, RenderConfig};
-use crate::embree::{CommittedScene, Ray};
 use crate::error::Result;
+use crate::raycast::{Ray, RayCaster};
 use crate::rng::{hash2, Rng};
 use crate::sampling::{cosine_hemisphere, Frame};
-use crate::scene::{Scene, SurfacePoint};
-use glam::{DVec3, Vec3};
+use crate::scene::{Material, PreparedScene, Scene, SurfacePoint};
+use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
-use std::sync::atomic::{AtomicU64, Ordering};
 
-/// Renders `part` of the light of `scene` with the path tracer, on the
-/// current rayon pool. Reads `width`, `height`, `rows` (a tile), `spp`,
-/// `seed`, `camera` and `show_emitters` of `cfg` (no photon-map settings).
-/// `progress(rows_done, rows_total)` is called from worker threads.
+/// Renders `part` of the light of the scene of `prepared` with the path
+/// tracer, on the current rayon pool, over its caster. Reads `width`,
+/// `height`, `rows` (a tile), `spp`, `seed`, `camera` and `show_emitters` of
+/// `cfg` (no photon-map settings). `progress(rows_done, rows_total)` is
+/// called from worker threads.
 ///
 /// # Errors
 /// [`crate::Error::InvalidParameter`] for bad settings,
 /// [`crate::Error::InvalidScene`] for a scene that fails
 /// [`Scene::validate`].
-pub fn render_path(
-    scene: &Scene,
-    rt: &CommittedScene,
+pub fn render_path<C: RayCaster>(
+    prepared: &PreparedScene<C>,
     cfg: &RenderConfig,
     part: PathPart,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Image> {
-    render_path_with(scene, rt, cfg, part, progress).map(|(image, _)| image)
+    render_path_with(prepared, cfg, part, progress).map(|(image, _)| image)
 }
 
 /// [`render_path`] with the render's counts ([`RenderStats::samples`] and
@@ -45,59 +46,68 @@ pub fn render_path(
 ///
 /// # Errors
 /// As [`render_path`].
-pub fn render_path_with(
+pub fn render_path_with<C: RayCaster>(
+    prepared: &PreparedScene<C>,
+    cfg: &RenderConfig,
+    part: PathPart,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(Image, RenderStats)> {
+    path_image(prepared.scene(), prepared.caster(), cfg, part, progress)
+}
+
+fn path_image(
     scene: &Scene,
-    rt: &CommittedScene,
+    rt: &dyn RayCaster,
     cfg: &RenderConfig,
     part: PathPart,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Image, RenderStats)> {
     cfg.validate()?;
     scene.validate()?;
-    // A tile is an image of its rows only; pixels keep their whole-image
-    // index, so their samples are the whole image's.
-    let (y0, y1) = cfg.rows.unwrap_or((0, cfg.height));
-    let mut image = Image::new(cfg.width, y1 - y0)?;
     let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
-    let pt = PathTracer::new(scene, rt);
-    let width = cfg.width as usize;
-    let rows = (y1 - y0) as u64;
-    let done = AtomicU64::new(0);
-    let dropped = AtomicU64::new(0);
-    image
-        .pixels
-        .par_chunks_mut(width)
-        .enumerate()
-        .for_each(|(y, row)| {
-            let y = y + y0 as usize;
-            let mut row_dropped = 0;
-            for (x, px) in row.iter_mut().enumerate() {
-                let key = hash2(cfg.seed, (y * width + x) as u64);
-                let (mut sum, mut kept) = (DVec3::ZERO, 0);
-                for s in 0..cfg.spp {
-                    let mut rng = Rng::new(hash2(key, s as u64));
-                    let [jx, jy] = rng.next_2d();
-                    let ray = rays.ray(x as f32 + jx, y as f32 + jy);
-                    let l = pt.radiance(ray, part, cfg.show_emitters, &mut rng);
-                    // A NaN or infinite sample is dropped, not spread, and counted.
-                    if l.is_finite() {
-                        sum += l.as_dvec3();
-                        kept += 1;
-                    }
-                }
-                let (mean, dropped_here) = pixel_mean(sum, kept, cfg.spp);
-                *px = mean;
-                row_dropped += dropped_here;
-            }
-            dropped.fetch_add(row_dropped, Ordering::Relaxed);
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, rows);
-        });
+    let estimator = PathEstimator {
+        pt: PathTracer::over(scene, rt),
+        part,
+        show_emitters: cfg.show_emitters,
+    };
+    let (image, dropped) = film::develop(cfg, &rays, &estimator, progress)?;
     let stats = RenderStats {
-        samples: cfg.width as u64 * rows * cfg.spp as u64,
-        dropped_samples: dropped.into_inner(),
+        samples: u64::from(image.width) * u64::from(image.height) * u64::from(cfg.spp),
+        dropped_samples: dropped,
         ..RenderStats::default()
     };
     Ok((image, stats))
+}
+
+/// The path tracer in the image loop: a uniformly jittered camera ray per
+/// sample, from the sample's own stream.
+struct PathEstimator<'a> {
+    pt: PathTracer<'a>,
+    part: PathPart,
+    show_emitters: bool,
+}
+
+impl PixelEstimator for PathEstimator<'_> {
+    type Row = ();
+    type Pixel = ();
+
+    fn row(&self) {}
+
+    fn pixel(&self, _key: u64) {}
+
+    fn radiance(
+        &self,
+        rays: &CameraRays,
+        _: &(),
+        sample: Sample,
+        rng: &mut Rng,
+        _: &mut (),
+    ) -> Vec3 {
+        let ray = film::camera_ray(rays, sample, rng.next_2d());
+        self.pt.radiance(ray, self.part, self.show_emitters, rng)
+    }
+
+    fn row_done(&self, _: ()) {}
 }
 
 /// A path-traced image as two independent halves.
@@ -117,16 +127,15 @@ impl PathHalves {
     ///
     /// # Errors
     /// As [`render_path`].
-    pub fn render(
-        scene: &Scene,
-        rt: &CommittedScene,
+    pub fn render<C: RayCaster>(
+        prepared: &PreparedScene<C>,
         cfg: &RenderConfig,
         part: PathPart,
     ) -> Result<Self> {
-        let (a, sa) = render_path_with(scene, rt, cfg, part, &|_, _| {})?;
+        let (a, sa) = render_path_with(prepared, cfg, part, &|_, _| {})?;
         let mut cb = cfg.clone();
         cb.seed = hash2(cfg.seed, 0x0B_5EED);
-        let (b, sb) = render_path_with(scene, rt, &cb, part, &|_, _| {})?;
+        let (b, sb) = render_path_with(prepared, &cb, part, &|_, _| {})?;
         Ok(PathHalves {
             a,
             b,
@@ -160,21 +169,18 @@ impl PathHalves {
     }
 
     /// Relative rms noise of [`PathHalves::mean`] over the pixels where
-    /// `keep` is true (all when `None`): `rmse(A, B) / 2 / mean`.
+    /// `keep` is true (all when `None`): `rmse(A, B) / 2 / mean`, which is
+    /// the relative RMSE of `A` against the mean (`A - (A + B) / 2 = (A - B) / 2`).
     pub fn noise_rel(&self, keep: Option<&[bool]>) -> f64 {
-        let (mut se, mut sum, mut n) = (0.0f64, 0.0f64, 0usize);
-        for (i, (p, q)) in self.a.pixels.iter().zip(&self.b.pixels).enumerate() {
-            if keep.is_some_and(|k| !k.get(i).copied().unwrap_or(false)) {
-                continue;
+        let all;
+        let keep = match keep {
+            Some(k) => k,
+            None => {
+                all = vec![true; self.a.pixels.len()];
+                &all
             }
-            se += (*p - *q).as_dvec3().length_squared();
-            sum += (*p + *q).as_dvec3().element_sum() * 0.5;
-            n += 3;
-        }
-        if n == 0 || sum <= 0.0 {
-            return 0.0;
-        }
-        (se / n as f64).sqrt() / 2.0 / (sum / n as f64)
+        };
+        relative_rmse_masked(&self.a, &self.mean(), keep).unwrap_or(0.0)
     }
 }
 
@@ -183,20 +189,11 @@ impl PathHalves {
 ///
 /// # Errors
 /// [`crate::Error::InvalidScene`] when neither `cfg` nor the scene has a camera.
-pub fn light_pixels(scene: &Scene, rt: &CommittedScene, cfg: &RenderConfig) -> Result<Vec<bool>> {
-    let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
-    let w = cfg.width as usize;
-    Ok((0..w * cfg.height as usize)
-        .map(|i| {
-            let ray = rays.ray((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
-            rt.intersect(&ray).is_some_and(|h| {
-                scene
-                    .materials
-                    .get(h.material as usize)
-                    .is_some_and(|m| m.emission.is_some())
-            })
-        })
-        .collect())
+pub fn light_pixels<C: RayCaster>(
+    prepared: &PreparedScene<C>,
+    cfg: &RenderConfig,
+) -> Result<Vec<bool>> {
+    first_hit_mask(prepared, cfg, |m| m.emission.is_some())
 }
 
 /// For each pixel, whether the ray through its centre first hits a specular
@@ -205,22 +202,30 @@ pub fn light_pixels(scene: &Scene, rt: &CommittedScene, cfg: &RenderConfig) -> R
 ///
 /// # Errors
 /// [`crate::Error::InvalidScene`] when neither `cfg` nor the scene has a camera.
-pub fn specular_pixels(
-    scene: &Scene,
-    rt: &CommittedScene,
+pub fn specular_pixels<C: RayCaster>(
+    prepared: &PreparedScene<C>,
     cfg: &RenderConfig,
 ) -> Result<Vec<bool>> {
+    first_hit_mask(prepared, cfg, |m| m.brdf.is_specular())
+}
+
+/// For each pixel, whether the ray through its centre first hits a material
+/// for which `is` holds.
+fn first_hit_mask<C: RayCaster>(
+    prepared: &PreparedScene<C>,
+    cfg: &RenderConfig,
+    is: impl Fn(&Material) -> bool,
+) -> Result<Vec<bool>> {
+    let scene = prepared.scene();
     let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
     let w = cfg.width as usize;
     Ok((0..w * cfg.height as usize)
         .map(|i| {
             let ray = rays.ray((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
-            rt.intersect(&ray).is_some_and(|h| {
-                scene
-                    .materials
-                    .get(h.material as usize)
-                    .is_some_and(|m| m.brdf.is_specular())
-            })
+            prepared
+                .caster()
+                .intersect(&ray)
+                .is_some_and(|h| scene.materials.get(h.material as usize).is_some_and(&is))
         })
         .collect())
 }
@@ -231,14 +236,13 @@ pub fn specular_pixels(
 /// pi * mean(L)` for cosine-weighted directions. Adding the direct light's
 /// quadrature ([`super::quadrature_irradiance`]) gives the full irradiance.
 /// Point `i` draws from `hash2(seed, i)`; points run in parallel.
-pub fn indirect_irradiance(
-    scene: &Scene,
-    rt: &CommittedScene,
+pub fn indirect_irradiance<C: RayCaster>(
+    prepared: &PreparedScene<C>,
     points: &[SurfacePoint],
     samples: u32,
     seed: u64,
 ) -> Vec<Vec3> {
-    let pt = PathTracer::new(scene, rt);
+    let pt = PathTracer::new(prepared);
     let samples = samples.max(1);
     points
         .par_iter()

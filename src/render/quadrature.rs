@@ -8,21 +8,31 @@
 //! times its falloff (the smoothstep of [`crate::scene::SpotLight`]).
 
 use super::direct::{punctual_arrival, SHADOW_EPS};
-use crate::embree::{CommittedScene, Ray};
-use crate::scene::{Light, Scene, SurfacePoint};
+use crate::raycast::{Ray, RayCaster};
+use crate::scene::{Light, PreparedScene, Scene, SurfacePoint};
 use glam::Vec3;
 
 /// Direct irradiance at `x` (normal `n`) by a midpoint rule: every area-light
 /// triangle cut into `grid^2` similar sub-triangles, each sampled at its
-/// centroid; punctual lights exactly. With `rt`, every node traces a shadow
-/// ray; without, the lights are assumed fully visible.
-pub fn quadrature_irradiance(
-    scene: &Scene,
-    rt: Option<&CommittedScene>,
+/// centroid; punctual lights exactly. Every node traces a shadow ray with
+/// the caster of `prepared`.
+pub fn quadrature_irradiance<C: RayCaster>(
+    prepared: &PreparedScene<C>,
     x: Vec3,
     n: Vec3,
     grid: u32,
 ) -> Vec3 {
+    let rt: &dyn RayCaster = prepared.caster();
+    quadrature(prepared.scene(), Some(rt), x, n, grid)
+}
+
+/// [`quadrature_irradiance`] with every light fully visible: no shadow rays,
+/// no caster.
+pub fn unshadowed_irradiance(scene: &Scene, x: Vec3, n: Vec3, grid: u32) -> Vec3 {
+    quadrature(scene, None, x, n, grid)
+}
+
+fn quadrature(scene: &Scene, rt: Option<&dyn RayCaster>, x: Vec3, n: Vec3, grid: u32) -> Vec3 {
     let grid = grid.max(1);
     let eps = super::ray_epsilon(scene);
     let origin = x + n * eps;
@@ -62,7 +72,7 @@ pub fn quadrature_irradiance(
                                 if cos_l <= 0.0 || cos_x <= 0.0 || !visible(p) {
                                     continue;
                                 }
-                                let le = a.emission.profile.eval(Vec3::new(0.0, 0.0, cos_l));
+                                let le = a.emission.profile_toward(cos_l);
                                 e += a.emission.radiance * (le * cos_l * cos_x * da / r2);
                             }
                         }
@@ -179,13 +189,13 @@ mod tests {
         scene
             .add_mesh("light", quad, vec![[0, 1, 2], [0, 2, 3]], white)
             .unwrap();
-        let e = quadrature_irradiance(&scene, None, Vec3::ZERO, Vec3::Y, 64);
+        let e = unshadowed_irradiance(&scene, Vec3::ZERO, Vec3::Y, 64);
         // Square of half-side a at distance h, on axis: E = 4 L [a/sqrt(a^2+h^2) atan(a/sqrt(a^2+h^2))]
         let q = (a * a + h * h).sqrt();
         let exact = 4.0 * (a / q) * (a / q).atan();
         assert!((e.x / exact - 1.0).abs() < 1e-3, "{} vs {exact}", e.x);
         // Facing up instead: nothing.
-        assert!(quadrature_irradiance(&scene, None, Vec3::ZERO, -Vec3::Y, 8).x == 0.0);
+        assert!(unshadowed_irradiance(&scene, Vec3::ZERO, -Vec3::Y, 8).x == 0.0);
         let _ = PI;
     }
 }

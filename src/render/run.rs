@@ -1,21 +1,22 @@
-//! Running the estimator over an image: rows of pixels in parallel, the
-//! cache built first when the settings ask for one, the [`RenderStats`].
+//! The photon render: its settings checked, the cache built first when they
+//! ask for one, the estimator run over the image ([`super::film`]), the
+//! [`RenderStats`].
 
 use super::cache::{CacheConfig, IrradianceCache};
 use super::camera::CameraRays;
 use super::direct::LightSampler;
 use super::estimate::Lookup;
-use super::integrator::{Ctx, Scratch};
+use super::film::{self, PixelEstimator, Sample};
+use super::integrator::{Ctx, SampleScratch};
 use super::sampler::{dim, PixelSampler};
 use super::CAUSTIC_RADIUS_FRACTION;
 use super::{default_max_radius, ray_epsilon, Image, RenderConfig, RenderMaps, View};
-use crate::embree::CommittedScene;
 use crate::engine::albedo::AlbedoTable;
 use crate::error::{Error, Result};
-use crate::rng::{hash2, Rng};
-use crate::scene::Scene;
-use glam::{DVec3, Vec3};
-use rayon::prelude::*;
+use crate::raycast::RayCaster;
+use crate::rng::Rng;
+use crate::scene::{PreparedScene, Scene};
+use glam::Vec3;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// What a render measured besides its image.
@@ -43,20 +44,21 @@ pub struct RenderStats {
     pub dropped_samples: u64,
 }
 
-/// Renders `scene` (whose Embree geometry is `rt`) with `maps`, on the current
-/// rayon pool. `progress(rows_done, rows_total)` is called from worker threads.
+/// Renders the scene of `prepared` with `maps`, on the current rayon pool,
+/// over whatever [`RayCaster`] it was prepared with (Embree's, or a
+/// renderer's own). `progress(rows_done, rows_total)` is called from worker
+/// threads.
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] for bad settings or a view that needs a photon
 /// map when `maps` is `None`.
-pub fn render(
-    scene: &Scene,
-    rt: &CommittedScene,
+pub fn render<C: RayCaster>(
+    prepared: &PreparedScene<C>,
     maps: Option<&RenderMaps>,
     cfg: &RenderConfig,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Image> {
-    render_with(scene, rt, maps, None, cfg, progress).map(|(image, _)| image)
+    render_with(prepared, maps, None, cfg, progress).map(|(image, _)| image)
 }
 
 /// [`render`] returning the render's [`RenderStats`]. The gather reads its
@@ -66,16 +68,24 @@ pub fn render(
 ///
 /// # Errors
 /// As [`render`].
-pub fn render_with(
-    scene: &Scene,
-    rt: &CommittedScene,
+pub fn render_with<C: RayCaster>(
+    prepared: &PreparedScene<C>,
     maps: Option<&RenderMaps>,
     cache: Option<&IrradianceCache>,
     cfg: &RenderConfig,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Image, RenderStats)> {
-    cfg.validate()?;
-    scene.validate()?;
+    render_photons(
+        prepared.scene(),
+        prepared.caster(),
+        maps,
+        cache,
+        cfg,
+        progress,
+    )
+}
+
+fn check_maps(cfg: &RenderConfig, maps: Option<&RenderMaps>) -> Result<()> {
     if maps.is_none() && cfg.view != View::DirectOnly {
         return Err(Error::param(
             "photon map",
@@ -89,10 +99,22 @@ pub fn render_with(
              full-only (Maps::full_only); build them with Maps::from_photons",
         ));
     }
-    // A tile (`cfg.rows`) is an image of its rows only; pixels keep their
-    // whole-image index, so their samples are the whole image's.
-    let (y0, y1) = cfg.rows.unwrap_or((0, cfg.height));
-    let mut image = Image::new(cfg.width, y1 - y0)?;
+    Ok(())
+}
+
+// One body for every caster (behind `dyn`: a virtual call is nothing next
+// to a ray and a photon lookup), so the renderer is compiled once.
+fn render_photons(
+    scene: &Scene,
+    rt: &dyn RayCaster,
+    maps: Option<&RenderMaps>,
+    cache: Option<&IrradianceCache>,
+    cfg: &RenderConfig,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(Image, RenderStats)> {
+    cfg.validate()?;
+    scene.validate()?;
+    check_maps(cfg, maps)?;
     let max_radius = cfg.max_radius.unwrap_or_else(|| default_max_radius(scene));
     let lookup = Lookup {
         k: cfg.k,
@@ -102,24 +124,22 @@ pub fn render_with(
         (None, Some(m))
             if cfg.cache_stride > 0 && cfg.final_gather > 0 && cfg.view == View::Full =>
         {
-            let (lo, hi) = scene.bounds();
             let c = CacheConfig {
                 stride: cfg.cache_stride,
                 lookup,
             };
-            Some(IrradianceCache::build(&m.full, rt, (hi - lo).length(), &c)?)
+            Some(IrradianceCache::build_in(&m.full, scene, rt, &c)?)
         }
         _ => None,
     };
     let cache = cache.or(built.as_ref());
-    let camera = cfg.camera_for(scene)?;
-    let rays = CameraRays::new(&camera, cfg.width, cfg.height);
+    let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
     let ctx = Ctx {
         scene,
         rt,
         maps,
         cache,
-        lights: LightSampler::new(scene),
+        lights: LightSampler::over(scene, rt),
         albedo: match cache {
             Some(_) => scene
                 .materials()
@@ -142,67 +162,65 @@ pub fn render_with(
         eps: ray_epsilon(scene),
         show_emitters: cfg.show_emitters,
     };
-    let width = cfg.width as usize;
-    let rows = (y1 - y0) as u64;
-    let done = AtomicU64::new(0);
-    let (lookup_ns, hits, misses) = (AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0));
-    let dropped = AtomicU64::new(0);
-    image
-        .pixels
-        .par_chunks_mut(width)
-        .enumerate()
-        .for_each(|(y, row)| {
-            let y = y + y0 as usize;
-            let mut sc = Scratch::new(cfg.k);
-            let mut row_dropped = 0;
-            for (x, px) in row.iter_mut().enumerate() {
-                let pixel = (y * width + x) as u64;
-                let key = hash2(cfg.seed, pixel);
-                let sampler = PixelSampler::new(key);
-                let mut sum = DVec3::ZERO;
-                let mut kept = 0;
-                for s in 0..cfg.spp {
-                    let mut rng = Rng::new(hash2(key, s as u64));
-                    let [jx, jy] = sampler.get_2d(dim::PIXEL, s, cfg.spp);
-                    let ray = rays.ray(x as f32 + jx, y as f32 + jy);
-                    let l = ctx.radiance(ray, (&sampler, s), &mut rng, &mut sc);
-                    // A NaN or infinite sample is dropped, not spread, and counted.
-                    if l.is_finite() {
-                        sum += l.as_dvec3();
-                        kept += 1;
-                    }
-                }
-                let (mean, dropped_here) = pixel_mean(sum, kept, cfg.spp);
-                *px = mean;
-                row_dropped += dropped_here;
-            }
-            dropped.fetch_add(row_dropped, Ordering::Relaxed);
-            lookup_ns.fetch_add(sc.lookup_ns, Ordering::Relaxed);
-            hits.fetch_add(sc.hits, Ordering::Relaxed);
-            misses.fetch_add(sc.misses, Ordering::Relaxed);
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, rows);
-        });
+    let estimator = PhotonEstimator {
+        ctx,
+        k: cfg.k,
+        lookup_ns: AtomicU64::new(0),
+        hits: AtomicU64::new(0),
+        misses: AtomicU64::new(0),
+    };
+    let (image, dropped) = film::develop(cfg, &rays, &estimator, progress)?;
     let stats = RenderStats {
-        samples: cfg.width as u64 * rows * cfg.spp as u64,
-        lookup_s: lookup_ns.into_inner() as f64 * 1e-9,
-        cache_hits: hits.into_inner(),
-        cache_misses: misses.into_inner(),
+        samples: u64::from(image.width) * u64::from(image.height) * u64::from(cfg.spp),
+        lookup_s: estimator.lookup_ns.into_inner() as f64 * 1e-9,
+        cache_hits: estimator.hits.into_inner(),
+        cache_misses: estimator.misses.into_inner(),
         cache_build_s: built.as_ref().map_or(0.0, |c| c.build_s),
         cache_entries: cache.map_or(0, |c| c.len()),
         cache_bytes_per_entry: cache.map_or(0, |c| c.bytes_per_entry()),
-        dropped_samples: dropped.into_inner(),
+        dropped_samples: dropped,
     };
     Ok((image, stats))
 }
 
-/// A pixel from the f64 sum of its `kept` finite samples out of `spp`, and
-/// how many of its samples were dropped (summed in f32, samples near f32's
-/// range overflowed to infinite pixels). A mean beyond f32 drops them all.
-pub(crate) fn pixel_mean(sum: DVec3, kept: u32, spp: u32) -> (Vec3, u64) {
-    let mean = (sum / f64::from(spp)).as_vec3();
-    if mean.is_finite() {
-        (mean, u64::from(spp - kept))
-    } else {
-        (Vec3::ZERO, u64::from(spp))
+/// The photon render's estimator ([`Ctx::radiance`]) in the image loop, with
+/// the lookup counters of its rows.
+struct PhotonEstimator<'a> {
+    ctx: Ctx<'a>,
+    k: usize,
+    lookup_ns: AtomicU64,
+    hits: AtomicU64,
+    misses: AtomicU64,
+}
+
+impl PixelEstimator for PhotonEstimator<'_> {
+    type Row = SampleScratch;
+    type Pixel = PixelSampler;
+
+    fn row(&self) -> SampleScratch {
+        SampleScratch::new(self.k)
+    }
+
+    fn pixel(&self, key: u64) -> PixelSampler {
+        PixelSampler::new(key)
+    }
+
+    fn radiance(
+        &self,
+        rays: &CameraRays,
+        sampler: &PixelSampler,
+        sample: Sample,
+        rng: &mut Rng,
+        sc: &mut SampleScratch,
+    ) -> Vec3 {
+        let jitter = sampler.get_2d(dim::PIXEL, sample.s, self.ctx.spp);
+        let ray = film::camera_ray(rays, sample, jitter);
+        self.ctx.radiance(ray, (sampler, sample.s), rng, sc)
+    }
+
+    fn row_done(&self, sc: SampleScratch) {
+        self.lookup_ns.fetch_add(sc.lookup_ns, Ordering::Relaxed);
+        self.hits.fetch_add(sc.hits, Ordering::Relaxed);
+        self.misses.fetch_add(sc.misses, Ordering::Relaxed);
     }
 }

@@ -108,10 +108,24 @@ impl Emission {
     pub fn radiance_at(&self, cos: f32) -> Vec3 {
         let c = self.facing(cos);
         if c > 0.0 {
-            self.radiance * self.profile.eval(Vec3::new(0.0, 0.0, c))
+            self.radiance_toward(c)
         } else {
             Vec3::ZERO
         }
+    }
+
+    /// Radiance toward a direction whose profile cosine (already
+    /// [`facing`](Self::facing)) is `cos`: `radiance * profile(cos)`.
+    #[inline]
+    pub fn radiance_toward(&self, cos: f32) -> Vec3 {
+        self.radiance * self.profile_toward(cos)
+    }
+
+    /// The profile's factor at the profile cosine `cos` (`cos^n` for the
+    /// paper's lights).
+    #[inline]
+    pub fn profile_toward(&self, cos: f32) -> f32 {
+        self.profile.eval(Vec3::new(0.0, 0.0, cos))
     }
 
     /// Faces that emit: 1 or 2.
@@ -197,6 +211,43 @@ impl Camera {
             up: Vec3::Y,
             vfov_deg: 39.3077,
         }
+    }
+
+    /// A camera at `eye` looking at `target`, with `up` (any vector not
+    /// along the view) made orthogonal to the view, and a vertical field of
+    /// view of `vfov_deg` degrees.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidParameter`] when `eye` is `target`, `up` lies
+    /// along the view, a value is not finite, or the field of view is not in
+    /// `(0, 180)`.
+    pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, vfov_deg: f32) -> crate::Result<Self> {
+        let forward = (target - eye).normalize_or_zero();
+        let right = forward.cross(up).normalize_or_zero();
+        if !(eye.is_finite() && target.is_finite() && up.is_finite()) {
+            return Err(crate::Error::param(
+                "camera",
+                "eye, target and up must be finite",
+            ));
+        }
+        if forward == Vec3::ZERO || right == Vec3::ZERO {
+            return Err(crate::Error::param(
+                "camera",
+                "the eye must differ from the target, and up must not lie along the view",
+            ));
+        }
+        if !(vfov_deg > 0.0 && vfov_deg < 180.0) {
+            return Err(crate::Error::param(
+                "camera",
+                format!("the vertical field of view must be in (0, 180) degrees, got {vfov_deg}"),
+            ));
+        }
+        Ok(Camera {
+            eye,
+            forward,
+            up: right.cross(forward),
+            vfov_deg,
+        })
     }
 }
 

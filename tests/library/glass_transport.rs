@@ -16,6 +16,7 @@ use adaptive_pm::scene::{Camera, Emission, Material, Scene};
 use glam::Vec3;
 
 use crate::common::{self, assert_sigmas, MeanVar};
+use std::sync::Arc;
 
 const IOR: f32 = 1.5;
 /// Fresnel reflectance at normal incidence, ((n - 1) / (n + 1))^2.
@@ -380,11 +381,11 @@ fn radiance_seen_from_inside_glass_is_eta_squared_times_the_outside() {
     })
     .unwrap();
     let device = Device::new().unwrap();
-    let rt = s.embree_geometry(&device).unwrap();
+    let prepared = Arc::new(s.clone().commit(&device).unwrap());
     let mut cfg = RenderConfig::new(8, 8);
     cfg.spp = 64;
     cfg.seed = common::seed(15);
-    let img = render_path(&s, &rt, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+    let img = render_path(&prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
     let mut mv = MeanVar::default();
     for y in 0..8 {
         for x in 0..8 {

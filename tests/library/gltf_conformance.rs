@@ -9,12 +9,13 @@ use adaptive_pm::brdf::Brdf;
 use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::rng::Rng;
-use adaptive_pm::scene::{Light, PreparedScene, Scene};
+use adaptive_pm::scene::{Light, Scene};
 use glam::Vec3;
 use serde_json::{json, Value};
 use std::path::PathBuf;
 
 use crate::common;
+use std::sync::Arc;
 
 /// One primitive: positions, indices, mode, material.
 type Primitive<'a> = (&'a [[f32; 3]], &'a [u32], u32, Option<usize>);
@@ -182,8 +183,8 @@ fn downward_share(scene: &Scene, n: usize, seed: u64) -> f64 {
 /// Photons stored on the floor (y = 0) by a classic trace of `n_max` photons.
 fn floor_photons(scene: &Scene, n_max: u64, seed: u64) -> u64 {
     let device = Device::new().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
-    let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
+    let tracer = Tracer::new(Arc::clone(&prepared));
     let mut cfg = TraceConfig::new(Mode::Classic, Budget::NMax(n_max));
     cfg.seed = seed;
     let out = tracer.trace(&cfg).unwrap();
@@ -558,12 +559,10 @@ fn the_blender_export_lights_its_floor_and_renders() {
     );
 
     let device = Device::new().unwrap();
-    let rt = s.embree_geometry(&device).unwrap();
+    let prepared = Arc::new(s.clone().commit(&device).unwrap());
     let mut cfg = TraceConfig::new(Mode::Classic, Budget::NMax(20_000));
     cfg.seed = 5;
-    let out = Tracer::new(PreparedScene::new(s.clone(), &rt).unwrap())
-        .trace(&cfg)
-        .unwrap();
+    let out = Tracer::new(Arc::clone(&prepared)).trace(&cfg).unwrap();
     let records = out.records();
     // The floor is the plane y = 0; the panel hangs 2 above it.
     let floor = records.iter().filter(|r| r.position.y.abs() < 1e-3).count();
@@ -576,7 +575,7 @@ fn the_blender_export_lights_its_floor_and_renders() {
     let maps = RenderMaps::build(&records);
     let mut rc = RenderConfig::new(32, 24);
     rc.spp = 2;
-    let image = render(&s, &rt, Some(&maps), &rc, &|_, _| {}).unwrap();
+    let image = render(&prepared, Some(&maps), &rc, &|_, _| {}).unwrap();
     let lit = image
         .pixels
         .iter()

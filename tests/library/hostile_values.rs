@@ -18,6 +18,7 @@ use glam::Vec3;
 use std::f32::consts::PI;
 
 use crate::common;
+use std::sync::Arc;
 
 /// A white Lambert square of side `side` in the z = 0 plane, facing +z.
 fn floor(side: f32) -> Scene {
@@ -138,13 +139,13 @@ fn samples_beyond_f32_are_counted_not_silently_dropped() {
     let mut s = floor(1e-6);
     s.add_light(point(1e-7, 7e28)).unwrap();
     look_down(&mut s, 1e-5, 5.0);
-    let rt = s.embree_geometry(&Device::new().unwrap()).unwrap();
+    let prepared = s.commit(&Device::new().unwrap()).unwrap();
     let cfg = direct_only(8, 2);
-    let (image, stats) = render_with(&s, &rt, None, None, &cfg, &|_, _| {}).unwrap();
+    let (image, stats) = render_with(&prepared, None, None, &cfg, &|_, _| {}).unwrap();
     assert_eq!(stats.samples, 128);
     assert!(stats.dropped_samples > 0, "{stats:?}");
     assert!(image.pixels.iter().all(|p| p.is_finite()));
-    let (image, stats) = render_path_with(&s, &rt, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+    let (image, stats) = render_path_with(&prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
     assert!(stats.dropped_samples > 0, "{stats:?}");
     assert!(image.pixels.iter().all(|p| p.is_finite()));
 }
@@ -155,9 +156,9 @@ fn a_bright_but_representable_scene_drops_nothing() {
     let mut s = floor(4.0);
     s.add_light(point(1.0, 3.8e26 / (4.0 * PI))).unwrap();
     look_down(&mut s, 3.0, 40.0);
-    let rt = s.embree_geometry(&Device::new().unwrap()).unwrap();
+    let prepared = s.commit(&Device::new().unwrap()).unwrap();
     let cfg = direct_only(9, 4);
-    let (image, stats) = render_with(&s, &rt, None, None, &cfg, &|_, _| {}).unwrap();
+    let (image, stats) = render_with(&prepared, None, None, &cfg, &|_, _| {}).unwrap();
     assert_eq!(stats.dropped_samples, 0);
     // Lambert floor under an isotropic point light: at the centre, straight
     // below it, L = (albedo / pi) I / h^2 (the centre pixel spans 0.24
@@ -178,14 +179,14 @@ fn a_bright_but_representable_scene_drops_nothing() {
 fn path_traced_tiles_are_the_whole_image_rows() {
     let s = Scene::cornell().unwrap();
     let device = Device::new().unwrap();
-    let rt = s.embree_geometry(&device).unwrap();
+    let prepared = Arc::new(s.clone().commit(&device).unwrap());
     let mut cfg = RenderConfig::new(12, 10);
     cfg.spp = 2;
-    let whole = render_path(&s, &rt, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+    let whole = render_path(&prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
     let mut rows = Vec::new();
     for (y0, y1) in [(0, 3), (3, 10)] {
         cfg.rows = Some((y0, y1));
-        let tile = render_path(&s, &rt, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+        let tile = render_path(&prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
         assert_eq!(tile.pixels.len(), 12 * (y1 - y0) as usize);
         rows.extend(tile.pixels);
     }

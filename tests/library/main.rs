@@ -25,6 +25,7 @@ mod gltf_glass;
 mod gltf_validator;
 mod hostile;
 mod hostile_values;
+mod image_checksums;
 mod isa_pinning;
 mod kdtree;
 mod kdtree_memory;

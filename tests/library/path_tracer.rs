@@ -4,18 +4,19 @@
 //! each.
 
 use adaptive_pm::brdf::{Brdf, Lambert};
-use adaptive_pm::embree::{CommittedScene, Device, Ray};
+use adaptive_pm::embree::{Device, EmbreeScene, Ray};
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::render::{
     cache::DEFAULT_STRIDE, default_max_radius, floor_points, light_pixels, quadrature_irradiance,
-    render_with, CacheConfig, IrradianceCache, Lookup, PathHalves, PathPart, PathTracer,
-    RenderConfig, RenderMaps, View, DEFAULT_K,
+    render_with, unshadowed_irradiance, CacheConfig, IrradianceCache, Lookup, PathHalves, PathPart,
+    PathTracer, RenderConfig, RenderMaps, View, DEFAULT_K,
 };
 use adaptive_pm::rng::{hash2, Rng};
-use adaptive_pm::scene::{Camera, Emission, Material, PreparedScene, Scene};
+use adaptive_pm::scene::{Camera, Emission, Material, Scene};
 use glam::Vec3;
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 fn cornell(n: f32) -> Scene {
     let mut s = Scene::cornell().unwrap();
@@ -46,12 +47,12 @@ fn direct_light_equals_the_quadrature_oracle() {
     let device = Device::new().unwrap();
     for n in [0.0f32, 20.0] {
         let scene = cornell(n);
-        let rt = scene.embree_geometry(&device).unwrap();
-        let pt = PathTracer::new(&scene, &rt);
+        let prepared = Arc::new(scene.clone().commit(&device).unwrap());
+        let pt = PathTracer::new(&prepared);
         let mut checked = Vec::new();
         for (i, p) in floor_points(&scene, "floor", 8, 8, 0.1).iter().enumerate() {
-            let shadowed = quadrature_irradiance(&scene, Some(&rt), p.position, p.normal, 16);
-            let open = quadrature_irradiance(&scene, None, p.position, p.normal, 16);
+            let shadowed = quadrature_irradiance(&prepared, p.position, p.normal, 16);
+            let open = unshadowed_irradiance(&scene, p.position, p.normal, 16);
             if (shadowed - open).abs().max_element() > 1e-6 * open.max_element() {
                 continue;
             }
@@ -136,7 +137,7 @@ fn furnace_gives_le_over_one_minus_rho_on_every_pixel() {
     }
     scene.add_mesh("box", pos, idx, mat).unwrap();
     let device = Device::new().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
     let mut cfg = RenderConfig::new(12, 12);
     cfg.spp = 64;
     cfg.seed = crate::common::seed(1);
@@ -147,7 +148,7 @@ fn furnace_gives_le_over_one_minus_rho_on_every_pixel() {
         vfov_deg: 70.0,
     });
     let img =
-        adaptive_pm::render::render_path(&scene, &rt, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+        adaptive_pm::render::render_path(&prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
     let expect = (le / (1.0 - rho)) as f64;
     let v: Vec<f64> = img.pixels.iter().map(|p| p.x as f64).collect();
     let (m, se) = mean_se(&v);
@@ -170,22 +171,17 @@ fn furnace_gives_le_over_one_minus_rho_on_every_pixel() {
 /// and each half's pixel has the same variance, so the mean's variance is
 /// `sum_p ((a_p - b_p) / 2)^2 / n^2` (n degrees of freedom, not the one of
 /// the two halves' means).
-fn path_reference(
-    scene: &Scene,
-    rt: &CommittedScene,
-    size: u32,
-    spp: u32,
-) -> (Vec<bool>, f64, f64) {
+fn path_reference(prepared: &EmbreeScene, size: u32, spp: u32) -> (Vec<bool>, f64, f64) {
     let mut cfg = RenderConfig::new(size, size);
     cfg.spp = spp;
     cfg.show_emitters = false;
     cfg.seed = crate::common::seed(1);
-    let keep: Vec<bool> = light_pixels(scene, rt, &cfg)
+    let keep: Vec<bool> = light_pixels(prepared, &cfg)
         .unwrap()
         .iter()
         .map(|l| !l)
         .collect();
-    let halves = PathHalves::render(scene, rt, &cfg, PathPart::Full).unwrap();
+    let halves = PathHalves::render(prepared, &cfg, PathPart::Full).unwrap();
     let (pa, pb) = (masked_mean(&halves.a, &keep), masked_mean(&halves.b, &keep));
     let se = pixel_halves_se(&halves.a, &halves.b, &keep);
     (keep, 0.5 * (pa + pb), se)
@@ -232,8 +228,7 @@ fn masked_mean(img: &adaptive_pm::render::Image, keep: &[bool]) -> f64 {
 /// standard error of the render noise alone from their pixel-by-pixel
 /// differences (with two renders; `NaN` with one).
 fn photon_mean_with(
-    scene: &Scene,
-    rt: &CommittedScene,
+    prepared: &Arc<EmbreeScene>,
     (mode, n_max): (Mode, u64),
     (size, spp, renders): (u32, u32, u32),
     seed: u64,
@@ -241,13 +236,11 @@ fn photon_mean_with(
 ) -> (f64, f64) {
     let mut tc = TraceConfig::new(mode, Budget::NMax(n_max));
     tc.seed = seed;
-    let out = Tracer::new(PreparedScene::new(scene.clone(), rt).unwrap())
-        .trace(&tc)
-        .unwrap();
+    let out = Tracer::new(Arc::clone(prepared)).trace(&tc).unwrap();
+    let scene = prepared.scene();
     // The full map alone is what the default render reads; one cache for
     // all the renders (the one `render` would build from the map).
     let maps = RenderMaps::full_only(out.photons, out.frame);
-    let (lo, hi) = scene.bounds();
     let lookup = Lookup {
         k: DEFAULT_K,
         max_radius: default_max_radius(scene),
@@ -256,7 +249,7 @@ fn photon_mean_with(
         stride: DEFAULT_STRIDE,
         lookup,
     };
-    let cache = IrradianceCache::build(&maps.full, rt, (hi - lo).length(), &cache_cfg).unwrap();
+    let cache = IrradianceCache::build(&maps.full, prepared, &cache_cfg).unwrap();
     let imgs: Vec<_> = (0..renders)
         .map(|i| {
             let mut cfg = RenderConfig::new(size, size);
@@ -264,7 +257,7 @@ fn photon_mean_with(
             cfg.seed = if i == 0 { seed } else { hash2(seed, i as u64) };
             cfg.show_emitters = false;
             cfg.view = View::Full;
-            render_with(scene, rt, Some(&maps), Some(&cache), &cfg, &|_, _| {})
+            render_with(prepared, Some(&maps), Some(&cache), &cfg, &|_, _| {})
                 .unwrap()
                 .0
         })
@@ -293,22 +286,14 @@ fn photon_mean_with(
 fn photon_and_path_renders_agree_within_the_photon_bias() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
-    let (keep, path, path_se) = path_reference(&scene, &rt, 24, 256);
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
+    let (keep, path, path_se) = path_reference(&prepared, 24, 256);
     let n = 50_000;
     let runs = |n_max: u64| {
         let v: Vec<f64> = (0..10u64)
             .map(|j| {
                 let seed = crate::common::seed(1 + 1000 * j);
-                photon_mean_with(
-                    &scene,
-                    &rt,
-                    (Mode::Classic, n_max),
-                    (24, 16, 1),
-                    seed,
-                    &keep,
-                )
-                .0
+                photon_mean_with(&prepared, (Mode::Classic, n_max), (24, 16, 1), seed, &keep).0
             })
             .collect();
         mean_se(&v)
@@ -361,14 +346,13 @@ fn photon_and_path_renders_agree_within_the_photon_bias() {
 fn bias_falls_with_the_photon_count() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
     let size = 32;
-    let (keep, path, path_se) = path_reference(&scene, &rt, size, 512);
+    let (keep, path, path_se) = path_reference(&prepared, size, 512);
     let rel = |m: f64| m / path - 1.0;
     let adaptive = |n: u64, spp: u32, renders: u32, seed: u64| {
         photon_mean_with(
-            &scene,
-            &rt,
+            &prepared,
             (Mode::Adaptive, n),
             (size, spp, renders),
             seed,

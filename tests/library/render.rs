@@ -2,17 +2,18 @@
 //! quadrature over the light, convergence of every mode, EXR round trip, and
 //! bad input. Tiny images, small budgets, fixed seeds.
 
-use adaptive_pm::embree::{CommittedScene, Device};
+use adaptive_pm::embree::{Device, EmbreeScene};
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::photon_map::{PhotonMap, PhotonRecord};
 use adaptive_pm::render::{
-    floor_points, irradiance_estimate, quadrature_irradiance, render, Image, Lookup, RenderConfig,
-    RenderMaps, View,
+    floor_points, irradiance_estimate, quadrature_irradiance, render, unshadowed_irradiance, Image,
+    Lookup, RenderConfig, RenderMaps, View,
 };
-use adaptive_pm::scene::{PreparedScene, Scene};
+use adaptive_pm::scene::Scene;
 use adaptive_pm::Error;
 use glam::Vec3;
+use std::sync::Arc;
 
 fn cornell(n: f32) -> Scene {
     let mut s = Scene::cornell().unwrap();
@@ -20,12 +21,10 @@ fn cornell(n: f32) -> Scene {
     s
 }
 
-fn maps(scene: &Scene, rt: &CommittedScene, mode: Mode, n_max: u64, seed: u64) -> RenderMaps {
+fn maps(prepared: &Arc<EmbreeScene>, mode: Mode, n_max: u64, seed: u64) -> RenderMaps {
     let mut cfg = TraceConfig::new(mode, Budget::NMax(n_max));
     cfg.seed = seed;
-    let out = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap())
-        .trace(&cfg)
-        .unwrap();
+    let out = Tracer::new(Arc::clone(prepared)).trace(&cfg).unwrap();
     RenderMaps::build(&out.records())
 }
 
@@ -34,7 +33,7 @@ fn maps(scene: &Scene, rt: &CommittedScene, mode: Mode, n_max: u64, seed: u64) -
 /// photon estimate converges to for that radius, so the comparison has no
 /// kernel bias left, only photon noise. Also says whether every node of the
 /// disc sees the whole light (no shadow in the kernel).
-fn cone_smoothed(scene: &Scene, rt: &CommittedScene, x: Vec3, r: f32) -> (f64, bool) {
+fn cone_smoothed(prepared: &EmbreeScene, x: Vec3, r: f32) -> (f64, bool) {
     let m = 9;
     let (mut sum, mut wsum, mut lit) = (0.0f64, 0.0f64, true);
     for i in 0..m {
@@ -46,8 +45,8 @@ fn cone_smoothed(scene: &Scene, rt: &CommittedScene, x: Vec3, r: f32) -> (f64, b
                 continue;
             }
             let p = x + Vec3::new(dx, 0.0, dz);
-            let shadowed = quadrature_irradiance(scene, Some(rt), p, Vec3::Y, 12);
-            let open = quadrature_irradiance(scene, None, p, Vec3::Y, 12);
+            let shadowed = quadrature_irradiance(prepared, p, Vec3::Y, 12);
+            let open = unshadowed_irradiance(prepared.scene(), p, Vec3::Y, 12);
             lit &= (shadowed - open).abs().max_element() <= 1e-6 * open.max_element();
             let w = (1.0 - d / r) as f64;
             sum += w * open.x as f64;
@@ -85,11 +84,11 @@ fn primary_map_irradiance_matches_the_light_quadrature() {
     let device = Device::new().unwrap();
     for n in [0.0f32, 50.0] {
         let scene = cornell(n);
-        let rt = scene.embree_geometry(&device).unwrap();
+        let prepared = Arc::new(scene.clone().commit(&device).unwrap());
         // Classic mode: every depth-0 photon of the light has the same power.
         let mut cfg = TraceConfig::new(Mode::Classic, Budget::NMax(300_000));
         cfg.seed = crate::common::seed(11);
-        let first: Vec<PhotonRecord> = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap())
+        let first: Vec<PhotonRecord> = Tracer::new(Arc::clone(&prepared))
             .trace(&cfg)
             .unwrap()
             .records()
@@ -139,7 +138,7 @@ fn primary_map_irradiance_matches_the_light_quadrature() {
             if !inside || est.found < k {
                 continue;
             }
-            let (expect, lit) = cone_smoothed(&scene, &rt, x, r);
+            let (expect, lit) = cone_smoothed(&prepared, x, r);
             if !lit || expect <= 0.0 {
                 continue;
             }
@@ -229,7 +228,7 @@ fn error_ratio_jackknife(a: &[f64], b: &[f64]) -> (f64, f64) {
 fn image_error_falls_as_the_budget_grows_in_every_mode() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
     let view_cfg = |k: usize| {
         let mut c = RenderConfig::new(32, 32);
         c.view = View::Map {
@@ -240,16 +239,9 @@ fn image_error_falls_as_the_budget_grows_in_every_mode() {
         c.show_emitters = false;
         c
     };
-    let reference_maps = maps(
-        &scene,
-        &rt,
-        Mode::Classic,
-        1_000_000,
-        crate::common::seed(99),
-    );
+    let reference_maps = maps(&prepared, Mode::Classic, 1_000_000, crate::common::seed(99));
     let reference = render(
-        &scene,
-        &rt,
+        &prepared,
         Some(&reference_maps),
         &view_cfg(1000),
         &|_, _| {},
@@ -260,8 +252,8 @@ fn image_error_falls_as_the_budget_grows_in_every_mode() {
         let errors: Vec<Vec<f64>> = [(4_000u64, 20usize), (64_000, 80)]
             .iter()
             .map(|&(n, k)| {
-                let m = maps(&scene, &rt, mode, n, crate::common::seed(5));
-                let img = render(&scene, &rt, Some(&m), &view_cfg(k), &|_, _| {}).unwrap();
+                let m = maps(&prepared, mode, n, crate::common::seed(5));
+                let img = render(&prepared, Some(&m), &view_cfg(k), &|_, _| {}).unwrap();
                 block_errors(&img, &reference, 4)
             })
             .collect();
@@ -302,17 +294,17 @@ fn image_error_falls_as_the_budget_grows_in_every_mode() {
 fn full_and_map_views_agree_on_the_mean() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
-    let m = maps(&scene, &rt, Mode::Adaptive, 50_000, crate::common::seed(3));
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
+    let m = maps(&prepared, Mode::Adaptive, 50_000, crate::common::seed(3));
     let size = 24;
     let mut cfg = RenderConfig::new(size, size);
     cfg.spp = 4;
     cfg.seed = crate::common::seed(1);
-    let full_img = render(&scene, &rt, Some(&m), &cfg, &|_, _| {}).unwrap();
+    let full_img = render(&prepared, Some(&m), &cfg, &|_, _| {}).unwrap();
     cfg.view = View::Map {
         primary_only: false,
     };
-    let map_img = render(&scene, &rt, Some(&m), &cfg, &|_, _| {}).unwrap();
+    let map_img = render(&prepared, Some(&m), &cfg, &|_, _| {}).unwrap();
     let allowance = 0.015;
     for (c, name) in ["red", "green", "blue"].iter().enumerate() {
         let nb = size.div_ceil(4) as usize;
@@ -340,7 +332,7 @@ fn full_and_map_views_agree_on_the_mean() {
     }
     let (full, map) = (full_img.mean(), map_img.mean());
     cfg.view = View::DirectOnly;
-    let direct = render(&scene, &rt, None, &cfg, &|_, _| {}).unwrap().mean();
+    let direct = render(&prepared, None, &cfg, &|_, _| {}).unwrap().mean();
     // Indirect light is a real part of the Cornell box (a sanity check, not
     // a statistical bound: direct / full is ~0.6, and its noise ~1 %).
     assert!(
@@ -353,14 +345,14 @@ fn full_and_map_views_agree_on_the_mean() {
 fn tiny_render_round_trips_through_exr_and_is_deterministic() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
-    let m = maps(&scene, &rt, Mode::Adaptive, 10_000, crate::common::seed(1));
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
+    let m = maps(&prepared, Mode::Adaptive, 10_000, crate::common::seed(1));
     let mut cfg = RenderConfig::new(7, 5);
     cfg.spp = 2;
     cfg.seed = crate::common::seed(1);
-    let img = render(&scene, &rt, Some(&m), &cfg, &|_, _| {}).unwrap();
+    let img = render(&prepared, Some(&m), &cfg, &|_, _| {}).unwrap();
     let pool = adaptive_pm::embree::thread_pool(1).unwrap();
-    let again = pool.install(|| render(&scene, &rt, Some(&m), &cfg, &|_, _| {}).unwrap());
+    let again = pool.install(|| render(&prepared, Some(&m), &cfg, &|_, _| {}).unwrap());
     assert_eq!(img, again, "one thread and many give the same image");
     assert!(img.pixels.iter().all(|p| p.is_finite()));
     assert!(img.mean().max_element() > 0.0);
@@ -380,16 +372,16 @@ fn tiny_render_round_trips_through_exr_and_is_deterministic() {
 fn bad_sizes_and_paths_are_clear_errors_without_partial_files() {
     let device = Device::new().unwrap();
     let scene = Scene::cornell().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
     for (w, h) in [(0, 4), (4, 0), (20_000, 4), (16_384, 16_384 + 1)] {
         let cfg = RenderConfig::new(w, h);
-        let e = render(&scene, &rt, None, &cfg, &|_, _| {}).unwrap_err();
+        let e = render(&prepared, None, &cfg, &|_, _| {}).unwrap_err();
         assert!(matches!(e, Error::InvalidParameter { .. }), "{w}x{h}: {e}");
     }
     // A map view without a map.
     let mut cfg = RenderConfig::new(4, 4);
     cfg.view = View::Full;
-    assert!(render(&scene, &rt, None, &cfg, &|_, _| {}).is_err());
+    assert!(render(&prepared, None, &cfg, &|_, _| {}).is_err());
     cfg.spp = 0;
     assert!(cfg.validate().is_err());
 

@@ -7,14 +7,16 @@ use adaptive_pm::engine::{Budget, Maps, Mode, TraceConfig, Tracer};
 use adaptive_pm::photon_map::{PhotonMap, PhotonRecord};
 use adaptive_pm::render::{
     cache::MAX_STRIDE, default_max_radius, floor_points, irradiance_estimate,
-    quadrature_irradiance, render, CacheConfig, IrradianceCache, Lookup, RenderConfig, View,
+    quadrature_irradiance, render, unshadowed_irradiance, CacheConfig, IrradianceCache, Lookup,
+    RenderConfig, View,
 };
 use adaptive_pm::rng::Rng;
-use adaptive_pm::scene::{triangle_area, PreparedScene, Scene};
+use adaptive_pm::scene::{triangle_area, Scene};
 use adaptive_pm::Error;
 use glam::Vec3;
 use serde_json::Value;
 use std::process::Command;
+use std::sync::Arc;
 
 /// Spatial batch means: the blocks of side `side` (world units, in the floor
 /// plane) that `x` falls in, for standard errors over points whose estimates
@@ -85,8 +87,8 @@ fn difference_and_se(blocks: &[(f64, f64)]) -> (f64, f64) {
 fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
     let scene = Scene::cornell().unwrap();
     let device = Device::new().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
-    let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
+    let tracer = Tracer::new(Arc::clone(&prepared));
     let trace = |seed: u64| {
         let mut cfg = TraceConfig::new(Mode::Classic, Budget::NMax(300_000));
         cfg.seed = crate::common::seed(seed);
@@ -100,7 +102,7 @@ fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
     };
     let (lo, hi) = scene.bounds();
     let cache_cfg = CacheConfig { stride: 8, lookup };
-    let cache = IrradianceCache::build(&maps.full, &rt, (hi - lo).length(), &cache_cfg).unwrap();
+    let cache = IrradianceCache::build(&maps.full, &prepared, &cache_cfg).unwrap();
     assert!(cache.bytes_per_entry() <= 16, "{}", cache.bytes_per_entry());
     let samples_per_photon = cache.samples() as f64 / maps.full.len() as f64;
     assert!(
@@ -122,8 +124,8 @@ fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
         (0..=8).all(|i| {
             let a = i as f32 * std::f32::consts::FRAC_PI_4;
             let q = x + (i > 0) as u32 as f32 * reach * Vec3::new(a.cos(), 0.0, a.sin());
-            let shadowed = quadrature_irradiance(&scene, Some(&rt), q, Vec3::Y, 4);
-            let open = quadrature_irradiance(&scene, None, q, Vec3::Y, 4);
+            let shadowed = quadrature_irradiance(&prepared, q, Vec3::Y, 4);
+            let open = unshadowed_irradiance(&scene, q, Vec3::Y, 4);
             (shadowed - open).abs().max_element() <= 1e-6 * open.max_element()
         })
     };
@@ -131,7 +133,7 @@ fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
         // Points inside a block (the floor under it) are never seen: their
         // upward ray meets the block's top, not the ceiling.
         let up = adaptive_pm::embree::Ray::new(p.position + p.normal * 0.01, p.normal);
-        if rt.intersect(&up).is_none_or(|h| h.t < 500.0) {
+        if prepared.caster().intersect(&up).is_none_or(|h| h.t < 500.0) {
             continue;
         }
         let e = irradiance_estimate(&maps.full, p.position, p.normal, lookup, &mut scratch);
@@ -212,7 +214,7 @@ fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
 fn cache_is_unbiased_on_a_uniform_density() {
     let scene = Scene::cornell().unwrap();
     let device = Device::new().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
     let floor: Vec<[Vec3; 3]> = scene
         .meshes()
         .iter()
@@ -256,7 +258,7 @@ fn cache_is_unbiased_on_a_uniform_density() {
     };
     let (lo, hi) = scene.bounds();
     let cache_cfg = CacheConfig { stride: 8, lookup };
-    let cache = IrradianceCache::build(&map, &rt, (hi - lo).length(), &cache_cfg).unwrap();
+    let cache = IrradianceCache::build(&map, &prepared, &cache_cfg).unwrap();
     let exact = n as f64 / area as f64;
     let side = 10.0 * 0.9 * (hi.x - lo.x) / 100.0;
     let mut lookups = Vec::new();
@@ -381,21 +383,19 @@ fn render_json_has_the_throughput_keys() {
 fn gather_through_the_cache_keeps_the_mean() {
     let scene = Scene::cornell().unwrap();
     let device = Device::new().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
     let mut t = TraceConfig::new(Mode::Adaptive, Budget::NMax(50_000));
     t.seed = crate::common::seed(2);
-    let out = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap())
-        .trace(&t)
-        .unwrap();
+    let out = Tracer::new(Arc::clone(&prepared)).trace(&t).unwrap();
     let maps = Maps::build(&out.records());
     let size = 24;
     let mut cfg = RenderConfig::new(size, size);
     cfg.spp = 16;
     cfg.view = View::Full;
     cfg.seed = crate::common::seed(1);
-    let cached = render(&scene, &rt, Some(&maps), &cfg, &|_, _| {}).unwrap();
+    let cached = render(&prepared, Some(&maps), &cfg, &|_, _| {}).unwrap();
     cfg.cache_stride = 0;
-    let knn = render(&scene, &rt, Some(&maps), &cfg, &|_, _| {}).unwrap();
+    let knn = render(&prepared, Some(&maps), &cfg, &|_, _| {}).unwrap();
     assert!(cached.pixels.iter().all(|p| p.is_finite()));
     let allowance = 0.0075;
     for (c, name) in ["red", "green", "blue"].iter().enumerate() {
@@ -427,10 +427,10 @@ fn gather_through_the_cache_keeps_the_mean() {
 fn full_only_maps_serve_the_default_render_and_refuse_the_others() {
     let scene = Scene::cornell().unwrap();
     let device = Device::new().unwrap();
-    let rt = scene.embree_geometry(&device).unwrap();
+    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
     let mut cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(20_000));
     cfg.seed = crate::common::seed(1);
-    let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap());
+    let tracer = Tracer::new(Arc::clone(&prepared));
     let out = tracer.trace(&cfg).unwrap();
     let all = Maps::from_photons(out.photons.clone(), out.frame);
     let full = Maps::full_only(out.photons, out.frame);
@@ -439,15 +439,15 @@ fn full_only_maps_serve_the_default_render_and_refuse_the_others() {
     rc.spp = 2;
     rc.seed = crate::common::seed(1);
     assert!(!rc.reads_split_maps());
-    let a = render(&scene, &rt, Some(&all), &rc, &|_, _| {}).unwrap();
-    let b = render(&scene, &rt, Some(&full), &rc, &|_, _| {}).unwrap();
+    let a = render(&prepared, Some(&all), &rc, &|_, _| {}).unwrap();
+    let b = render(&prepared, Some(&full), &rc, &|_, _| {}).unwrap();
     assert_eq!(a.pixels, b.pixels);
     for view in [View::Map { primary_only: true }, View::Full] {
         let mut c = rc.clone();
         c.view = view;
         c.final_gather = 0;
         assert!(c.reads_split_maps());
-        match render(&scene, &rt, Some(&full), &c, &|_, _| {}) {
+        match render(&prepared, Some(&full), &c, &|_, _| {}) {
             Err(Error::InvalidParameter { name, reason }) => {
                 assert!(
                     name.contains("photon map") && reason.contains("full-only"),

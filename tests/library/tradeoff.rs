@@ -183,8 +183,8 @@ fn reference_cache_is_keyed_by_content_not_path() {
     std::fs::create_dir_all(dir.join("cache")).unwrap();
     let device = Device::new().unwrap();
     let get = |s: &Scene| {
-        let rt = s.embree_geometry(&device).unwrap();
-        Reference::get(s, &rt, &cfg).unwrap()
+        let prepared = s.clone().commit(&device).unwrap();
+        Reference::get(&prepared, &cfg).unwrap()
     };
     let first = get(&sa);
     assert!(!first.info.cached);

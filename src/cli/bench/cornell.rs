@@ -30,7 +30,7 @@ pub struct CornellArgs {
     #[arg(long, default_value = "1..200")]
     pub n_sweep: String,
     /// N_MAX of every run (the paper: 100000).
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, default_value_t = adaptive_pm::engine::config::PAPER_N_MAX)]
     pub n_max: u64,
     /// Modes, comma-separated.
     #[arg(

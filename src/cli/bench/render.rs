@@ -1,11 +1,11 @@
 //! `adaptive-pm bench render <SCENE>`: the photon render against the path
 //! tracer at equal error, the bias against the photon count, and direct light
-//! alone (see `adaptive_pm::render::study`). Times are from one run on one
+//! alone (see `adaptive_pm::experiments::render_study`). Times are from one run on one
 //! thread pool: only their ratios mean anything on a shared machine.
 
 use crate::cli::common::{open_scene, EmbreeArgs, ThreadArgs};
 use adaptive_pm::engine::Mode;
-use adaptive_pm::render::study::{run_direct_study, run_study, StudyConfig};
+use adaptive_pm::experiments::render_study::{run_direct_study, run_study, StudyConfig};
 use adaptive_pm::render::RenderConfig;
 use serde_json::json;
 
@@ -62,7 +62,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
     );
     let scene = open_scene(&args.scene, args.cosn)?;
     let device = args.embree.device()?;
-    let rt = scene.embree_geometry(&device)?;
+    let tracer = adaptive_pm::engine::Tracer::new(scene.commit(&device)?);
     let pool = args.threads.pool()?;
     let mut render = RenderConfig::new(args.size, args.size);
     render.light_samples = args.light_samples;
@@ -80,9 +80,9 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
         fixed_spp: args.fixed_spp,
     };
     let log = |s: &str| eprintln!("{s}");
-    let result = pool.install(|| run_study(&scene, &rt, &cfg, &log))?;
+    let result = pool.install(|| run_study(&tracer, &cfg, &log))?;
     let direct = match args.direct_spp {
-        Some(spp) => Some(pool.install(|| run_direct_study(&scene, &rt, &cfg, spp))?),
+        Some(spp) => Some(pool.install(|| run_direct_study(tracer.prepared(), &cfg, spp))?),
         None => None,
     };
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();

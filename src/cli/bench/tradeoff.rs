@@ -103,9 +103,9 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
     };
     if let Some(target) = target {
         let device = args.embree.device()?;
-        let rt = scene.embree_geometry(&device)?;
+        let prepared = std::sync::Arc::new(scene.commit(&device)?);
         let rc = cfg.render_config(cfg.spp, 1);
-        let c = pool.install(|| choose_quality(&scene, &rt, Mode::Adaptive, target, &rc))?;
+        let c = pool.install(|| choose_quality(&prepared, Mode::Adaptive, target, &rc))?;
         if args.json {
             println!("{}", serde_json::to_string(&c)?);
         } else {

@@ -11,14 +11,13 @@
 
 use super::measure::{estimated_error, k_for};
 use super::reference::study_points;
-use crate::embree::CommittedScene;
+use crate::embree::EmbreeScene;
 use crate::engine::config::INT_MAX;
 use crate::engine::{Budget, Mode, TraceConfig, Tracer};
 use crate::error::{Error, Result};
 use crate::render::{render, RenderConfig, RenderMaps};
-use crate::scene::PreparedScene;
-use crate::scene::Scene;
 use serde::Serialize;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// `N_MAX` of the two pilot runs.
@@ -56,8 +55,7 @@ pub struct Choice {
 /// # Errors
 /// A target that is not a positive number; trace or render errors.
 pub fn choose_quality(
-    scene: &Scene,
-    rt: &CommittedScene,
+    prepared: &Arc<EmbreeScene>,
     mode: Mode,
     target: Target,
     rc: &RenderConfig,
@@ -71,18 +69,18 @@ pub fn choose_quality(
             format!("must be a positive number, got {v}"),
         ));
     }
-    let pts = study_points(scene, PILOT_POINTS);
+    let pts = study_points(prepared.scene(), PILOT_POINTS);
     let mut pilots = Vec::new();
     for n in PILOTS {
         let t = Instant::now();
-        let tracer = Tracer::new(PreparedScene::new(scene.clone(), rt)?);
+        let tracer = Tracer::new(Arc::clone(prepared));
         let out = tracer.trace(&TraceConfig::new(mode, Budget::NMax(n)))?;
         let maps = RenderMaps::build(&out.records());
         let mut c = rc.clone();
         c.k = k_for(n);
-        render(scene, rt, Some(&maps), &c, &|_, _| {})?;
+        render(prepared, Some(&maps), &c, &|_, _| {})?;
         let secs = t.elapsed().as_secs_f64();
-        pilots.push((n, secs, estimated_error(scene, rt, mode, n, 1, &pts)?));
+        pilots.push((n, secs, estimated_error(prepared, mode, n, 1, &pts)?));
     }
     let [(n0, t0, e0), (n1, t1, e1)] = [pilots[0], pilots[1]];
     let (n0, n1) = (n0 as f64, n1 as f64);

@@ -2,15 +2,17 @@
 
 use super::reference::Reference;
 use super::{Run, TradeoffConfig};
-use crate::embree::CommittedScene;
+use crate::embree::EmbreeScene;
 use crate::engine::config::INT_MAX;
 use crate::engine::{Budget, Mode, TraceConfig, Tracer};
 use crate::error::Result;
 use crate::photon_map::PhotonMap;
-use crate::render::{irradiance_estimate, render, Image, Lookup, RenderMaps, View};
+use crate::render::{
+    irradiance_estimate, relative_rmse_masked, render, Image, Lookup, RenderMaps, View,
+};
 use crate::rng::hash2;
-use crate::scene::PreparedScene;
-use crate::scene::{Scene, SurfacePoint};
+use crate::scene::SurfacePoint;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// What a run leaves for the bias/variance split: its indirect and full
@@ -38,34 +40,17 @@ pub fn rel_rmse(a: &[f64], r: &[f64]) -> f64 {
     }
 }
 
-/// [`rel_rmse`] over the pixels and channels where `keep` is true.
-pub fn masked_rel_rmse(a: &Image, r: &Image, keep: &[bool]) -> f64 {
-    let (mut se, mut sum, mut n) = (0.0f64, 0.0f64, 0usize);
-    for ((p, q), k) in a.pixels.iter().zip(&r.pixels).zip(keep) {
-        if *k {
-            se += (*p - *q).as_dvec3().length_squared();
-            sum += q.as_dvec3().element_sum();
-            n += 3;
-        }
-    }
-    if n == 0 || sum <= 0.0 {
-        return 0.0;
-    }
-    (se / n as f64).sqrt() / (sum / n as f64)
-}
-
+// A tracer of its own per run, as a user starting a run would have: its
+// time includes the directionality analysis.
 fn trace(
-    scene: &Scene,
-    rt: &CommittedScene,
+    prepared: &Arc<EmbreeScene>,
     mode: Mode,
     n_max: u64,
     seed: u64,
 ) -> Result<Vec<crate::photon_map::PhotonRecord>> {
     let mut cfg = TraceConfig::new(mode, Budget::NMax(n_max));
     cfg.seed = seed;
-    Ok(Tracer::new(PreparedScene::new(scene.clone(), rt)?)
-        .trace(&cfg)?
-        .records())
+    Ok(Tracer::new(Arc::clone(prepared)).trace(&cfg)?.records())
 }
 
 /// Irradiance (mean over RGB) at each point from `map` alone.
@@ -86,8 +71,7 @@ pub(crate) fn points_irradiance(map: &PhotonMap, pts: &[SurfacePoint], k: usize)
 /// The reference-free error estimate of a budget from two half-budget maps
 /// (see [`super`]): `rms(E_A - E_B) / sqrt(2) / mean`.
 pub(crate) fn estimated_error(
-    scene: &Scene,
-    rt: &CommittedScene,
+    prepared: &Arc<EmbreeScene>,
     mode: Mode,
     n_max: u64,
     seed: u64,
@@ -97,7 +81,7 @@ pub(crate) fn estimated_error(
     let half = (n_max / 2).max(1);
     let mut e = Vec::new();
     for s in [hash2(seed, 0xA), hash2(seed, 0xB)] {
-        let map = PhotonMap::build(&trace(scene, rt, mode, half, s)?);
+        let map = PhotonMap::build(&trace(prepared, mode, half, s)?);
         e.push(points_irradiance(&map, pts, k));
     }
     let mean: f64 = e.iter().flatten().sum::<f64>() / (2 * pts.len()).max(1) as f64;
@@ -116,8 +100,7 @@ pub(crate) fn estimated_error(
 
 /// Measures one run.
 pub(crate) fn measure(
-    scene: &Scene,
-    rt: &CommittedScene,
+    prepared: &Arc<EmbreeScene>,
     cfg: &TradeoffConfig,
     reference: &Reference,
     mode: Mode,
@@ -126,7 +109,7 @@ pub(crate) fn measure(
 ) -> Result<(Run, RunOutput)> {
     let k = k_for(n_max);
     let t = Instant::now();
-    let records = trace(scene, rt, mode, n_max, seed)?;
+    let records = trace(prepared, mode, n_max, seed)?;
     let trace_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let maps = RenderMaps::build(&records);
@@ -134,10 +117,10 @@ pub(crate) fn measure(
     let mut rc = cfg.render_config(cfg.spp, seed);
     rc.k = k;
     let t = Instant::now();
-    let full = render(scene, rt, Some(&maps), &rc, &|_, _| {})?;
+    let full = render(prepared, Some(&maps), &rc, &|_, _| {})?;
     let render_s = t.elapsed().as_secs_f64();
     rc.view = View::DirectOnly;
-    let direct = render(scene, rt, Some(&maps), &rc, &|_, _| {})?;
+    let direct = render(prepared, Some(&maps), &rc, &|_, _| {})?;
     let mut indirect = full.clone();
     for (p, d) in indirect.pixels.iter_mut().zip(&direct.pixels) {
         *p = (*p - *d).max(glam::Vec3::ZERO);
@@ -155,10 +138,10 @@ pub(crate) fn measure(
         render_s,
         time_s: trace_s + build_s + render_s,
         map_bytes: maps.full.memory_bytes() + maps.indirect.memory_bytes(),
-        indirect_rel_rmse: masked_rel_rmse(&indirect, &reference.indirect, &reference.keep),
-        image_rel_rmse: masked_rel_rmse(&full, &reference.full, &reference.keep),
+        indirect_rel_rmse: relative_rmse_masked(&indirect, &reference.indirect, &reference.keep)?,
+        image_rel_rmse: relative_rmse_masked(&full, &reference.full, &reference.keep)?,
         points_rel_err: rel_rmse(&points, &reference.irradiance),
-        estimated_rel_err: estimated_error(scene, rt, mode, n_max, seed, &reference.points)?,
+        estimated_rel_err: estimated_error(prepared, mode, n_max, seed, &reference.points)?,
     };
     Ok((
         run,

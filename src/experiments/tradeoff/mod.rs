@@ -58,7 +58,7 @@ pub mod output;
 mod reference;
 pub mod summary;
 
-pub use measure::{k_for, masked_rel_rmse, rel_rmse};
+pub use measure::{k_for, rel_rmse};
 pub use reference::{scene_hash, Reference, ReferenceInfo};
 
 use crate::engine::Mode;
@@ -66,6 +66,7 @@ use crate::error::{Error, Result};
 use crate::scene::Scene;
 use serde::Serialize;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// The reference noise must be below this fraction of the smallest error it judges.
 pub const NOISE_RATIO: f64 = 1.0 / 3.0;
@@ -244,11 +245,11 @@ pub fn run_tradeoff(
     scene.validate()?;
     let start = std::time::Instant::now();
     let device = crate::embree::Device::pinned_or_default(cfg.embree_isa)?;
-    let rt = scene.embree_geometry(&device)?;
+    let prepared = Arc::new(scene.clone().commit(&device)?);
     let total = cfg.modes.len() * cfg.budgets.len() * cfg.seeds as usize;
     let say = |done: usize, stage: String| progress(Progress { done, total, stage });
     say(0, "path-traced reference".into());
-    let reference = Reference::get(scene, &rt, cfg)?;
+    let reference = Reference::get(&prepared, cfg)?;
     let mut runs = Vec::with_capacity(total);
     let mut outputs = Vec::with_capacity(total);
     for &mode in &cfg.modes {
@@ -258,7 +259,7 @@ pub fn run_tradeoff(
                     runs.len(),
                     format!("{} N_MAX {n_max} seed {}", mode.name(), s + 1),
                 );
-                let (run, out) = measure::measure(scene, &rt, cfg, &reference, mode, n_max, s + 1)?;
+                let (run, out) = measure::measure(&prepared, cfg, &reference, mode, n_max, s + 1)?;
                 runs.push(run);
                 outputs.push(out);
             }

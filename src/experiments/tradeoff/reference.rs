@@ -2,12 +2,12 @@
 //! (keyed by the scene's content and the settings, see [`super`]).
 
 use super::{Run, TradeoffConfig, NOISE_RATIO};
-use crate::embree::CommittedScene;
 use crate::error::{Error, Result};
+use crate::raycast::RayCaster;
 use crate::render::{
     indirect_irradiance, light_pixels, quadrature_irradiance, Image, PathHalves, PathPart,
 };
-use crate::scene::{Light, Scene, SurfacePoint};
+use crate::scene::{Light, PreparedScene, Scene, SurfacePoint};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -114,10 +114,11 @@ impl Reference {
     ///
     /// # Errors
     /// Render errors, or an unreadable or unwritable cache file.
-    pub fn get(scene: &Scene, rt: &CommittedScene, cfg: &TradeoffConfig) -> Result<Self> {
+    pub fn get<C: RayCaster>(prepared: &PreparedScene<C>, cfg: &TradeoffConfig) -> Result<Self> {
+        let scene = prepared.scene();
         // The kernel set is in the key: another set's reference is as good
         // a reference, but not the one a fresh run would make.
-        let isa = rt.kernels().map_or("-".into(), |k| {
+        let isa = prepared.caster().kernels().map_or("-".into(), |k| {
             format!("{} {}", k.isa, crate::isa::version_name(k.version_code()))
         });
         let math = crate::isa::MathVariant::host().map_or("-", |m| m.name());
@@ -127,7 +128,7 @@ impl Reference {
         );
         let key = format!("{:016x}", fnv(settings.as_bytes(), scene_hash(scene)));
         let points = study_points(scene, cfg.points);
-        let keep: Vec<bool> = light_pixels(scene, rt, &cfg.render_config(1, 0))?
+        let keep: Vec<bool> = light_pixels(prepared, &cfg.render_config(1, 0))?
             .iter()
             .map(|l| !l)
             .collect();
@@ -142,26 +143,18 @@ impl Reference {
         }
         let t = std::time::Instant::now();
         let rc = cfg.render_config(cfg.reference_spp, REFERENCE_SEED);
-        let ind = PathHalves::render(scene, rt, &rc, PathPart::Indirect)?;
-        let dir = PathHalves::render(scene, rt, &rc, PathPart::Direct)?;
+        let ind = PathHalves::render(prepared, &rc, PathPart::Indirect)?;
+        let dir = PathHalves::render(prepared, &rc, PathPart::Direct)?;
         // Every error of the study is measured against this image.
         ind.require_complete()?;
         dir.require_complete()?;
         let grid = quadrature_grid(scene);
         let direct_e: Vec<f64> = points
             .iter()
-            .map(|p| {
-                luminance_mean(quadrature_irradiance(
-                    scene,
-                    Some(rt),
-                    p.position,
-                    p.normal,
-                    grid,
-                ))
-            })
+            .map(|p| luminance_mean(quadrature_irradiance(prepared, p.position, p.normal, grid)))
             .collect();
         let half = |seed| {
-            indirect_irradiance(scene, rt, &points, cfg.point_samples, seed)
+            indirect_irradiance(prepared, &points, cfg.point_samples, seed)
                 .into_iter()
                 .map(luminance_mean)
                 .collect::<Vec<f64>>()

@@ -5,28 +5,40 @@
 use super::{
     to_rgbe, CacheConfig, IrradianceCache, Slot, LEVELS, PLANE_TOLERANCE, SAMPLES_PER_CELL,
 };
-use crate::embree::{CommittedScene, Ray};
 use crate::error::Result;
 use crate::photon_map::{CompactPhoton, Neighbor, PhotonMap};
+use crate::raycast::{Ray, RayCaster};
 use crate::render::estimate::cone_filter;
+use crate::scene::{PreparedScene, Scene};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 use std::time::Instant;
 
 impl IrradianceCache {
-    /// Builds the cache of `full` (the map of all photons) in the geometry `rt`
-    /// whose diagonal is `diagonal`, on the current rayon pool.
+    /// Builds the cache of `full` (the map of all photons traced in
+    /// `prepared`), on the current rayon pool. Each sample's surface normal
+    /// comes from one ray of the caster of `prepared`.
     ///
     /// # Errors
     /// [`Error::InvalidParameter`](crate::Error::InvalidParameter) for a bad configuration.
-    pub fn build(
+    pub fn build<C: RayCaster>(
         full: &PhotonMap,
-        rt: &CommittedScene,
-        diagonal: f32,
+        prepared: &PreparedScene<C>,
+        cfg: &CacheConfig,
+    ) -> Result<Self> {
+        Self::build_in(full, prepared.scene(), prepared.caster(), cfg)
+    }
+
+    pub(crate) fn build_in(
+        full: &PhotonMap,
+        scene: &Scene,
+        rt: &dyn RayCaster,
         cfg: &CacheConfig,
     ) -> Result<Self> {
         cfg.validate()?;
+        let (lo, hi) = scene.bounds();
+        let diagonal = (hi - lo).length();
         let t = Instant::now();
         let stride = u64::from(cfg.stride);
         let plane = PLANE_TOLERANCE * diagonal;
@@ -161,7 +173,7 @@ impl IrradianceCache {
 
 /// The normal of the surface a photon travelling along `dir` landed on at
 /// `p`, facing the photon (against `dir`); `None` when no surface is there.
-fn surface_normal(rt: &CommittedScene, p: Vec3, dir: Vec3, diagonal: f32) -> Option<Vec3> {
+fn surface_normal(rt: &dyn RayCaster, p: Vec3, dir: Vec3, diagonal: f32) -> Option<Vec3> {
     let back = 1e-4 * diagonal;
     let ray = Ray {
         tfar: 2.0 * back,

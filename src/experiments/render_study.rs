@@ -5,7 +5,7 @@
 //! - **Reference**: the path tracer's image at `reference_spp` samples per
 //!   pixel (two independent halves, whose difference measures its own noise).
 //! - **Error**: relRMSE over the pixels that are not a light's own
-//!   ([`super::light_pixels`]), against the reference, emitters seen from the
+//!   ([`crate::render::light_pixels`]), against the reference, emitters seen from the
 //!   camera left out of both images (exact in both, and a bright light's
 //!   jittered edge would dominate the RMSE); the reference's noise
 //!   `n_ref` adds in quadrature, so the reported error is
@@ -27,14 +27,15 @@
 //!   them too; the photon render's search goes on until both the whole
 //!   image and the caustic's pixels reach the target.
 
-use super::path::PathPart;
-use super::path_render::{light_pixels, specular_pixels, PathHalves};
-use super::{mean_bias, relative_rmse_masked, render_path, render_with, Image, RenderConfig, View};
-use crate::embree::CommittedScene;
 use crate::engine::{Budget, Mode, TraceConfig, Tracer};
 use crate::error::{Error, Result};
+use crate::raycast::RayCaster;
+use crate::render::{
+    light_pixels, mean_bias, relative_rmse_masked, render_path, render_with, specular_pixels,
+    Image, PathHalves, PathPart, RenderConfig, View,
+};
 use crate::sampling::luminance;
-use crate::scene::{PreparedScene, Scene};
+use crate::scene::PreparedScene;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -146,19 +147,18 @@ pub struct StudyResult {
 ///
 /// # Errors
 /// Bad settings in `base`.
-pub fn caustic_pixels(
-    scene: &Scene,
-    rt: &CommittedScene,
+pub fn caustic_pixels<C: RayCaster>(
+    prepared: &PreparedScene<C>,
     base: &RenderConfig,
     spp: u32,
     reference: &Image,
     keep: &[bool],
 ) -> Result<Vec<bool>> {
-    let specular = specular_pixels(scene, rt, base)?;
+    let specular = specular_pixels(prepared, base)?;
     let mut c = base.clone();
     c.spp = spp.max(1);
     c.seed = base.seed ^ 0xCA_0571C;
-    let caustic = render_path(scene, rt, &c, PathPart::Caustic, &|_, _| {})?;
+    let caustic = render_path(prepared, &c, PathPart::Caustic, &|_, _| {})?;
     Ok((0..keep.len())
         .map(|i| {
             let r = luminance(reference.pixels[i]);
@@ -190,18 +190,19 @@ fn noise_free(e: f64, noise: f64) -> f64 {
 /// Bisection steps after the doubling search brackets the target spp.
 pub const REFINE: u32 = 3;
 
-/// Runs the benchmark on `scene` on the current rayon pool: the reference,
+/// Runs the benchmark on the scene of `tracer` on the current rayon pool
+/// (its caster renders too): the reference,
 /// the path tracer's timed render, then for each budget the photon render at
 /// rising spp until it reaches the target; `log` gets one line per step.
 ///
 /// # Errors
 /// Bad settings or a failed trace.
-pub fn run_study(
-    scene: &Scene,
-    rt: &CommittedScene,
+pub fn run_study<C: RayCaster>(
+    tracer: &Tracer<C>,
     cfg: &StudyConfig,
     log: &dyn Fn(&str),
 ) -> Result<StudyResult> {
+    let prepared: &PreparedScene<C> = tracer.prepared();
     let mut base = cfg.render.clone();
     base.width = cfg.size;
     base.height = cfg.size;
@@ -212,13 +213,13 @@ pub fn run_study(
     base.show_emitters = false;
     base.validate()?;
     check_reference_spp(cfg.reference_spp, cfg.path_spp)?;
-    let keep: Vec<bool> = light_pixels(scene, rt, &base)?.iter().map(|l| !l).collect();
+    let keep: Vec<bool> = light_pixels(prepared, &base)?.iter().map(|l| !l).collect();
 
     let t = Instant::now();
     let mut rc = base.clone();
     rc.spp = (cfg.reference_spp / 2).max(1);
     rc.seed = cfg.seed ^ 0x5EF_E2E4CE;
-    let halves = PathHalves::render(scene, rt, &rc, PathPart::Full)?;
+    let halves = PathHalves::render(prepared, &rc, PathPart::Full)?;
     let reference = halves.mean();
     let reference_noise = halves.noise_rel(Some(&keep));
     let reference_s = t.elapsed().as_secs_f64();
@@ -228,7 +229,7 @@ pub fn run_study(
         100.0 * reference_noise
     ));
     halves.require_complete()?;
-    let caustic_mask = caustic_pixels(scene, rt, &base, cfg.reference_spp / 4, &reference, &keep)?;
+    let caustic_mask = caustic_pixels(prepared, &base, cfg.reference_spp / 4, &reference, &keep)?;
     let caustic_count = caustic_mask.iter().filter(|&&c| c).count();
     let caustic_noise = halves.noise_rel(Some(&caustic_mask));
     if caustic_count > 0 {
@@ -241,7 +242,7 @@ pub fn run_study(
     let mut pc = base.clone();
     pc.spp = cfg.path_spp;
     let t = Instant::now();
-    let path = render_path(scene, rt, &pc, PathPart::Full, &|_, _| {})?;
+    let path = render_path(prepared, &pc, PathPart::Full, &|_, _| {})?;
     let path_s = t.elapsed().as_secs_f64();
     let path_err = noise_free(
         relative_rmse_masked(&path, &reference, &keep)?,
@@ -289,7 +290,7 @@ pub fn run_study(
         let mut tc = TraceConfig::new(cfg.mode, Budget::NMax(n_max));
         tc.seed = cfg.seed;
         let t = Instant::now();
-        let out = Tracer::new(PreparedScene::new(scene.clone(), rt)?).trace(&tc)?;
+        let out = tracer.trace(&tc)?;
         let trace_s = t.elapsed().as_secs_f64();
         let stored = out.photons.len();
         let maps = base.build_maps(out.photons, out.frame);
@@ -298,7 +299,7 @@ pub fn run_study(
             let mut c = base.clone();
             c.spp = spp;
             let t = Instant::now();
-            let (img, stats) = render_with(scene, rt, Some(&maps), None, &c, &|_, _| {})?;
+            let (img, stats) = render_with(prepared, Some(&maps), None, &c, &|_, _| {})?;
             let render_s = t.elapsed().as_secs_f64();
             let row = photon_row(&img, &reference, &keep, reference_noise, n_max, spp)?;
             let row = PhotonRow {
@@ -440,9 +441,8 @@ pub struct DirectRow {
 ///
 /// # Errors
 /// Bad settings.
-pub fn run_direct_study(
-    scene: &Scene,
-    rt: &CommittedScene,
+pub fn run_direct_study<C: RayCaster>(
+    prepared: &PreparedScene<C>,
     cfg: &StudyConfig,
     spp: u32,
 ) -> Result<Vec<DirectRow>> {
@@ -453,11 +453,11 @@ pub fn run_direct_study(
     base.show_emitters = false;
     base.validate()?;
     check_reference_spp(cfg.reference_spp, spp)?;
-    let keep: Vec<bool> = light_pixels(scene, rt, &base)?.iter().map(|l| !l).collect();
+    let keep: Vec<bool> = light_pixels(prepared, &base)?.iter().map(|l| !l).collect();
     let mut rc = base.clone();
     rc.spp = (cfg.reference_spp / 2).max(1);
     rc.seed = cfg.seed ^ 0xD1_2EC7;
-    let halves = PathHalves::render(scene, rt, &rc, PathPart::Direct)?;
+    let halves = PathHalves::render(prepared, &rc, PathPart::Direct)?;
     halves.require_complete()?;
     let reference = halves.mean();
     let noise = halves.noise_rel(Some(&keep));
@@ -476,14 +476,14 @@ pub fn run_direct_study(
     let mut pc = base.clone();
     pc.spp = spp;
     let t = Instant::now();
-    let img = render_path(scene, rt, &pc, PathPart::Direct, &|_, _| {})?;
+    let img = render_path(prepared, &pc, PathPart::Direct, &|_, _| {})?;
     rows.push(row("path", 1, t.elapsed().as_secs_f64(), &img)?);
     for l in [1, 2, 4] {
         let mut c = pc.clone();
         c.view = View::DirectOnly;
         c.light_samples = l;
         let t = Instant::now();
-        let (img, _) = render_with(scene, rt, None, None, &c, &|_, _| {})?;
+        let (img, _) = render_with(prepared, None, None, &c, &|_, _| {})?;
         rows.push(row("photon", l, t.elapsed().as_secs_f64(), &img)?);
     }
     Ok(rows)

@@ -1,0 +1,197 @@
+//! Rendered images, pinned: with Embree's kernel set pinned, an image is a
+//! function of the scene, the settings and the code, like a photon map
+//! (`isa_pinning.rs`). The checksums below were recorded before the
+//! renderer's image loop was written once for both estimators
+//! (`render/film.rs`) and its rays put behind the `RayCaster` seam; a change
+//! that moves them changes what users render: record the new values here.
+//!
+//! Also: a caster of the user's renders the same image as Embree's.
+
+use adaptive_pm::embree::{CommittedScene, Device, EmbreeScene};
+use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
+use adaptive_pm::isa::Isa;
+use adaptive_pm::raycast::{Hit, Ray, RayCaster};
+use adaptive_pm::render::{render, render_path, Image, PathPart, RenderConfig, RenderMaps, View};
+use adaptive_pm::scene::{PreparedScene, Scene};
+
+/// FNV-1a over the pixels' bits.
+fn checksum(img: &Image) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for p in &img.pixels {
+        for c in [p.x, p.y, p.z] {
+            for b in c.to_bits().to_le_bytes() {
+                h = (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
+            }
+        }
+    }
+    h
+}
+
+/// All four maps: the view without gather reads the indirect one.
+fn maps<C: RayCaster>(tracer: &Tracer<C>) -> RenderMaps {
+    let mut tc = TraceConfig::new(Mode::Adaptive, Budget::NMax(20_000));
+    tc.seed = 7;
+    RenderMaps::build(&tracer.trace(&tc).unwrap().records())
+}
+
+/// The five images of a scene: the default render, without gather, the
+/// map view, direct light only, and the path tracer's.
+fn images<C: RayCaster>(tracer: &Tracer<C>) -> [Image; 5] {
+    let prepared: &PreparedScene<C> = tracer.prepared();
+    let mut cfg = RenderConfig::new(24, 24);
+    cfg.spp = 2;
+    let maps = maps(tracer);
+    let full = render(prepared, Some(&maps), &cfg, &|_, _| {}).unwrap();
+    cfg.final_gather = 0;
+    let no_gather = render(prepared, Some(&maps), &cfg, &|_, _| {}).unwrap();
+    cfg.view = View::Map {
+        primary_only: false,
+    };
+    let map = render(prepared, Some(&maps), &cfg, &|_, _| {}).unwrap();
+    cfg.view = View::DirectOnly;
+    let direct = render(prepared, None, &cfg, &|_, _| {}).unwrap();
+    cfg.view = View::Full;
+    let path = render_path(prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+    [full, no_gather, map, direct, path]
+}
+
+fn embree_tracer(name: &str, isa: Isa) -> Tracer<CommittedScene> {
+    let device = Device::with_isa(isa).unwrap();
+    let prepared: EmbreeScene = Scene::open(name).unwrap().commit(&device).unwrap();
+    Tracer::new(prepared)
+}
+
+/// `(CPU vendor, kernel set, scene, checksums of `images`)`, as this test
+/// prints them on a mismatch; recorded on an Intel Xeon with AVX-512.
+/// AVX-512 is the same on every vendor (see `isa_pinning.rs`); the narrower
+/// sets are per vendor, and AMD's are not recorded yet.
+type Recorded = (Option<&'static str>, Isa, &'static str, [u64; 5]);
+const RECORDED: &[Recorded] = &[
+    (
+        Some("GenuineIntel"),
+        Isa::Sse2,
+        "cornell",
+        [
+            0x94e9_a6e0_59ed_784e,
+            0xd392_ae5f_cf25_5832,
+            0xd1e8_9d4b_527f_ce9e,
+            0x21a7_3131_5da6_2d84,
+            0xcbfc_b34c_1f85_2343,
+        ],
+    ),
+    (
+        Some("GenuineIntel"),
+        Isa::Sse2,
+        "cornell-glass",
+        [
+            0x3261_b6f7_8022_55fb,
+            0xe19d_978e_0c1b_28f6,
+            0xd178_adc3_505a_1a63,
+            0x4422_8fbf_cd9a_27b2,
+            0x8497_55c7_ad3b_1370,
+        ],
+    ),
+    (
+        Some("GenuineIntel"),
+        Isa::Avx2,
+        "cornell",
+        [
+            0x22d9_33a8_21b9_a584,
+            0x43f7_f470_ef9e_c433,
+            0x8bf2_5aa2_f039_5905,
+            0xddd1_6012_a5f9_002e,
+            0x749b_6bbc_8104_660e,
+        ],
+    ),
+    (
+        Some("GenuineIntel"),
+        Isa::Avx2,
+        "cornell-glass",
+        [
+            0x7692_d25d_d981_0d92,
+            0x9cfc_00b6_6ff6_7aef,
+            0x1ebf_4aeb_3fdd_6fee,
+            0xefdb_fecd_2b67_4307,
+            0x2e69_8064_d39c_888b,
+        ],
+    ),
+    (
+        None,
+        Isa::Avx512,
+        "cornell",
+        [
+            0xcc56_3f3b_4e63_376b,
+            0xfef1_c0e4_f37c_ce91,
+            0x0605_42eb_3124_8c84,
+            0xb30d_e337_1801_ec7b,
+            0xd099_d9ce_3f46_4ccc,
+        ],
+    ),
+    (
+        None,
+        Isa::Avx512,
+        "cornell-glass",
+        [
+            0x9870_822b_91c8_df7e,
+            0x133e_be17_baba_c39b,
+            0xbf96_9617_d9e1_7b6d,
+            0x9f14_6f8a_e7f9_9e7a,
+            0x3d36_ff31_c271_aa61,
+        ],
+    ),
+];
+
+fn cpu_vendor() -> Option<String> {
+    let info = std::fs::read_to_string("/proc/cpuinfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("vendor_id"))?;
+    Some(line.split(':').nth(1)?.trim().to_string())
+}
+
+#[test]
+fn pinned_images_have_the_recorded_checksums() {
+    let vendor = cpu_vendor();
+    let mut checked = 0;
+    for &(who, isa, name, expected) in RECORDED {
+        if !isa.is_supported() || who.is_some_and(|w| vendor.as_deref() != Some(w)) {
+            continue;
+        }
+        let got = images(&embree_tracer(name, isa)).map(|i| checksum(&i));
+        assert_eq!(
+            got,
+            expected,
+            "{} {name} on {vendor:?}: got {:#018x?}",
+            isa.name(),
+            got
+        );
+        checked += 1;
+    }
+    eprintln!("{checked} recorded image sets reproduced on {vendor:?}");
+}
+
+/// Embree behind the trait's default batch methods: a caster of the user's
+/// whose answers are Embree's bit for bit.
+struct OneByOne(CommittedScene);
+
+impl RayCaster for OneByOne {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.0.intersect(ray)
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.0.occluded(ray)
+    }
+}
+
+#[test]
+fn a_user_caster_renders_embrees_images() {
+    let device = Device::new().unwrap();
+    for name in ["cornell", "cornell-glass"] {
+        let scene = Scene::open(name).unwrap();
+        let own = OneByOne(scene.embree_geometry(&device).unwrap());
+        let mine = Tracer::new(PreparedScene::new(scene.clone(), own).unwrap());
+        let embree = Tracer::new(scene.commit(&device).unwrap());
+        let (a, b) = (images(&mine), images(&embree));
+        for (i, (a, b)) in a.iter().zip(&b).enumerate() {
+            assert_eq!(a.pixels, b.pixels, "{name}, image {i}");
+        }
+    }
+}
