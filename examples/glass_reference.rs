@@ -18,7 +18,7 @@ use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::experiments::render_study::caustic_pixels;
 use adaptive_pm::render::{
-    light_pixels, mean_bias, relative_rmse_masked, render, render_path, Image, PathHalves,
+    light_pixels, mean_bias, relative_rmse_masked, render, render_path_with, Image, PathHalves,
     PathPart, RenderConfig,
 };
 use adaptive_pm::scene::Scene;
@@ -62,9 +62,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     eprint!("\rreference: {done}/{total} rows");
                 }
             };
-            let a = render_path(prepared, &rc, PathPart::Full, &progress)?;
+            let (a, _) = render_path_with(prepared, &rc, PathPart::Full, &progress)?;
             rc.seed ^= 0xB;
-            let b = render_path(prepared, &rc, PathPart::Full, &progress)?;
+            let (b, _) = render_path_with(prepared, &rc, PathPart::Full, &progress)?;
             eprintln!(
                 "\rreference: {ref_spp} spp in {:.1} s",
                 t.elapsed().as_secs_f64()
@@ -91,7 +91,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     pc.spp = spp;
     pc.caustic_k = caustic_k;
     let maps = pc.build_maps(out.photons, out.frame);
-    let img = render(prepared, Some(&maps), &pc, &|_, _| {})?;
+    let img = render(prepared, Some(&maps), &pc)?;
     let photon_s = t.elapsed().as_secs_f64();
 
     // The images, to look at (the photon render's name carries its settings).

@@ -88,6 +88,21 @@ pub struct Hit {
     pub material: u32,
 }
 
+impl Hit {
+    /// The geometric normal on the side that a ray travelling along `dir`
+    /// comes from: `-ng` when `dir` runs along `ng` (the ray arrives from
+    /// behind), else `ng`. `facing(-out)` is the side a ray leaving along
+    /// `out` starts on.
+    #[inline]
+    pub fn facing(&self, dir: Vec3) -> Vec3 {
+        if self.ng.dot(dir) > 0.0 {
+            -self.ng
+        } else {
+            self.ng
+        }
+    }
+}
+
 /// Something that finds where rays hit a scene: closest hits and occlusion,
 /// one ray at a time or in batches. Shared by every tracing thread.
 ///

@@ -163,7 +163,7 @@ fn shade_hit<C>(
         if ctx.keep_records {
             out.records.push(record);
             // Surfaces are two-sided: the normal on the side the photon arrives from.
-            out.normals.push(if from_inside { -h.ng } else { h.ng });
+            out.normals.push(h.facing(p.direction));
         } else if position.is_finite() && power.is_finite() {
             // At most one store per photon of the batch: a slot is free.
             slots[out.stored] = ctx.frame.encode(&record);
@@ -217,11 +217,7 @@ fn shade_hit<C>(
         }
         // Off the surface on the side the child leaves by (the geometric
         // side: a shading normal may disagree with it).
-        let side = if direction.dot(h.ng) < 0.0 {
-            -h.ng
-        } else {
-            h.ng
-        };
+        let side = h.facing(-direction);
         out.children.push(PathState {
             origin: position + side * ctx.epsilon,
             direction,

@@ -158,7 +158,7 @@ pub fn caustic_pixels<C: RayCaster>(
     let mut c = base.clone();
     c.spp = spp.max(1);
     c.seed = base.seed ^ 0xCA_0571C;
-    let caustic = render_path(prepared, &c, PathPart::Caustic, &|_, _| {})?;
+    let caustic = render_path(prepared, &c, PathPart::Caustic)?;
     Ok((0..keep.len())
         .map(|i| {
             let r = luminance(reference.pixels[i]);
@@ -242,7 +242,7 @@ pub fn run_study<C: RayCaster>(
     let mut pc = base.clone();
     pc.spp = cfg.path_spp;
     let t = Instant::now();
-    let path = render_path(prepared, &pc, PathPart::Full, &|_, _| {})?;
+    let path = render_path(prepared, &pc, PathPart::Full)?;
     let path_s = t.elapsed().as_secs_f64();
     let path_err = noise_free(
         relative_rmse_masked(&path, &reference, &keep)?,
@@ -476,7 +476,7 @@ pub fn run_direct_study<C: RayCaster>(
     let mut pc = base.clone();
     pc.spp = spp;
     let t = Instant::now();
-    let img = render_path(prepared, &pc, PathPart::Direct, &|_, _| {})?;
+    let img = render_path(prepared, &pc, PathPart::Direct)?;
     rows.push(row("path", 1, t.elapsed().as_secs_f64(), &img)?);
     for l in [1, 2, 4] {
         let mut c = pc.clone();

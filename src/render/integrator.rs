@@ -141,7 +141,7 @@ impl<'a> Ctx<'a> {
                     throughput *= (-sigma * h.t * ray.dir.length()).exp();
                 }
             }
-            let normal = if from_inside { -h.ng } else { h.ng };
+            let normal = h.facing(dir);
             if bounce >= first_emission {
                 *emitted += throughput * Self::emitted(material, &h, wo);
             }
@@ -171,7 +171,7 @@ impl<'a> Ctx<'a> {
             if !alive || !consistent_with_geometry(h.ng, wo, out, transmitted) {
                 return None;
             }
-            let side = if out.dot(h.ng) < 0.0 { -h.ng } else { h.ng };
+            let side = h.facing(-out);
             ray = Ray::new(position + side * self.eps, out);
         }
         None

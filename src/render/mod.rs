@@ -17,7 +17,7 @@
 //! let run = tracer.trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000)))?;
 //! let maps = RenderMaps::build(&run.records());
 //! let cfg = RenderConfig::new(64, 64);
-//! let image = render(tracer.prepared(), Some(&maps), &cfg, &|_, _| {})?;
+//! let image = render(tracer.prepared(), Some(&maps), &cfg)?;
 //! image.write_exr("cornell.exr")?;
 //! # }
 //! # Ok::<(), adaptive_pm::Error>(())

@@ -195,7 +195,7 @@ impl<'a> PathTracer<'a> {
             let wo = -dir;
             let pos = ray.at(h.t);
             let from_inside = h.ng.dot(dir) > 0.0;
-            let normal = if from_inside { -h.ng } else { h.ng };
+            let normal = h.facing(dir);
             if from_inside {
                 // The segment just travelled lay inside this (closed) object.
                 if let Some(sigma) = mat.brdf.interior_attenuation() {
@@ -245,7 +245,7 @@ impl<'a> PathTracer<'a> {
                     break;
                 }
                 prev = None;
-                let side = if out.dot(h.ng) < 0.0 { -h.ng } else { h.ng };
+                let side = h.facing(-out);
                 ray = Ray::new(pos + side * self.eps, out);
                 continue;
             }

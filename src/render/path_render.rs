@@ -25,8 +25,7 @@ use std::f32::consts::PI;
 /// Renders `part` of the light of the scene of `prepared` with the path
 /// tracer, on the current rayon pool, over its caster. Reads `width`,
 /// `height`, `rows` (a tile), `spp`, `seed`, `camera` and `show_emitters` of
-/// `cfg` (no photon-map settings). `progress(rows_done, rows_total)` is
-/// called from worker threads.
+/// `cfg` (no photon-map settings).
 ///
 /// # Errors
 /// [`crate::Error::InvalidParameter`] for bad settings,
@@ -36,12 +35,12 @@ pub fn render_path<C: RayCaster>(
     prepared: &PreparedScene<C>,
     cfg: &RenderConfig,
     part: PathPart,
-    progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Image> {
-    render_path_with(prepared, cfg, part, progress).map(|(image, _)| image)
+    render_path_with(prepared, cfg, part, &|_, _| {}).map(|(image, _)| image)
 }
 
-/// [`render_path`] with the render's counts ([`RenderStats::samples`] and
+/// [`render_path`] with a progress callback, `progress(rows_done,
+/// rows_total)`, called from worker threads, and the render's counts ([`RenderStats::samples`] and
 /// [`RenderStats::dropped_samples`]; the photon-map fields are 0).
 ///
 /// # Errors

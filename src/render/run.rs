@@ -46,8 +46,7 @@ pub struct RenderStats {
 
 /// Renders the scene of `prepared` with `maps`, on the current rayon pool,
 /// over whatever [`RayCaster`] it was prepared with (Embree's, or a
-/// renderer's own). `progress(rows_done, rows_total)` is called from worker
-/// threads.
+/// renderer's own).
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] for bad settings or a view that needs a photon
@@ -56,12 +55,12 @@ pub fn render<C: RayCaster>(
     prepared: &PreparedScene<C>,
     maps: Option<&RenderMaps>,
     cfg: &RenderConfig,
-    progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Image> {
-    render_with(prepared, maps, None, cfg, progress).map(|(image, _)| image)
+    render_with(prepared, maps, None, cfg, &|_, _| {}).map(|(image, _)| image)
 }
 
-/// [`render`] returning the render's [`RenderStats`]. The gather reads its
+/// [`render`] with a progress callback, `progress(rows_done, rows_total)`,
+/// called from worker threads, returning the render's [`RenderStats`]. The gather reads its
 /// hits from `cache` when given; else, when the settings ask for a cache
 /// (`cache_stride > 0`, a gather, the full view), one is built from
 /// `maps.full` first (its time is in [`RenderStats::cache_build_s`]).

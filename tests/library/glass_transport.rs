@@ -385,7 +385,7 @@ fn radiance_seen_from_inside_glass_is_eta_squared_times_the_outside() {
     let mut cfg = RenderConfig::new(8, 8);
     cfg.spp = 64;
     cfg.seed = common::seed(15);
-    let img = render_path(&prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+    let img = render_path(&prepared, &cfg, PathPart::Full).unwrap();
     let mut mv = MeanVar::default();
     for y in 0..8 {
         for x in 0..8 {

@@ -575,7 +575,7 @@ fn the_blender_export_lights_its_floor_and_renders() {
     let maps = RenderMaps::build(&records);
     let mut rc = RenderConfig::new(32, 24);
     rc.spp = 2;
-    let image = render(&prepared, Some(&maps), &rc, &|_, _| {}).unwrap();
+    let image = render(&prepared, Some(&maps), &rc).unwrap();
     let lit = image
         .pixels
         .iter()

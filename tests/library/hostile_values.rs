@@ -182,11 +182,11 @@ fn path_traced_tiles_are_the_whole_image_rows() {
     let prepared = Arc::new(s.clone().commit(&device).unwrap());
     let mut cfg = RenderConfig::new(12, 10);
     cfg.spp = 2;
-    let whole = render_path(&prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+    let whole = render_path(&prepared, &cfg, PathPart::Full).unwrap();
     let mut rows = Vec::new();
     for (y0, y1) in [(0, 3), (3, 10)] {
         cfg.rows = Some((y0, y1));
-        let tile = render_path(&prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+        let tile = render_path(&prepared, &cfg, PathPart::Full).unwrap();
         assert_eq!(tile.pixels.len(), 12 * (y1 - y0) as usize);
         rows.extend(tile.pixels);
     }

@@ -41,17 +41,17 @@ fn images<C: RayCaster>(tracer: &Tracer<C>) -> [Image; 5] {
     let mut cfg = RenderConfig::new(24, 24);
     cfg.spp = 2;
     let maps = maps(tracer);
-    let full = render(prepared, Some(&maps), &cfg, &|_, _| {}).unwrap();
+    let full = render(prepared, Some(&maps), &cfg).unwrap();
     cfg.final_gather = 0;
-    let no_gather = render(prepared, Some(&maps), &cfg, &|_, _| {}).unwrap();
+    let no_gather = render(prepared, Some(&maps), &cfg).unwrap();
     cfg.view = View::Map {
         primary_only: false,
     };
-    let map = render(prepared, Some(&maps), &cfg, &|_, _| {}).unwrap();
+    let map = render(prepared, Some(&maps), &cfg).unwrap();
     cfg.view = View::DirectOnly;
-    let direct = render(prepared, None, &cfg, &|_, _| {}).unwrap();
+    let direct = render(prepared, None, &cfg).unwrap();
     cfg.view = View::Full;
-    let path = render_path(prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+    let path = render_path(prepared, &cfg, PathPart::Full).unwrap();
     [full, no_gather, map, direct, path]
 }
 

@@ -147,8 +147,7 @@ fn furnace_gives_le_over_one_minus_rho_on_every_pixel() {
         up: Vec3::Y,
         vfov_deg: 70.0,
     });
-    let img =
-        adaptive_pm::render::render_path(&prepared, &cfg, PathPart::Full, &|_, _| {}).unwrap();
+    let img = adaptive_pm::render::render_path(&prepared, &cfg, PathPart::Full).unwrap();
     let expect = (le / (1.0 - rho)) as f64;
     let v: Vec<f64> = img.pixels.iter().map(|p| p.x as f64).collect();
     let (m, se) = mean_se(&v);

@@ -240,20 +240,14 @@ fn image_error_falls_as_the_budget_grows_in_every_mode() {
         c
     };
     let reference_maps = maps(&prepared, Mode::Classic, 1_000_000, crate::common::seed(99));
-    let reference = render(
-        &prepared,
-        Some(&reference_maps),
-        &view_cfg(1000),
-        &|_, _| {},
-    )
-    .unwrap();
+    let reference = render(&prepared, Some(&reference_maps), &view_cfg(1000)).unwrap();
     let claim = 0.7;
     for mode in Mode::ALL {
         let errors: Vec<Vec<f64>> = [(4_000u64, 20usize), (64_000, 80)]
             .iter()
             .map(|&(n, k)| {
                 let m = maps(&prepared, mode, n, crate::common::seed(5));
-                let img = render(&prepared, Some(&m), &view_cfg(k), &|_, _| {}).unwrap();
+                let img = render(&prepared, Some(&m), &view_cfg(k)).unwrap();
                 block_errors(&img, &reference, 4)
             })
             .collect();
@@ -300,11 +294,11 @@ fn full_and_map_views_agree_on_the_mean() {
     let mut cfg = RenderConfig::new(size, size);
     cfg.spp = 4;
     cfg.seed = crate::common::seed(1);
-    let full_img = render(&prepared, Some(&m), &cfg, &|_, _| {}).unwrap();
+    let full_img = render(&prepared, Some(&m), &cfg).unwrap();
     cfg.view = View::Map {
         primary_only: false,
     };
-    let map_img = render(&prepared, Some(&m), &cfg, &|_, _| {}).unwrap();
+    let map_img = render(&prepared, Some(&m), &cfg).unwrap();
     let allowance = 0.015;
     for (c, name) in ["red", "green", "blue"].iter().enumerate() {
         let nb = size.div_ceil(4) as usize;
@@ -332,7 +326,7 @@ fn full_and_map_views_agree_on_the_mean() {
     }
     let (full, map) = (full_img.mean(), map_img.mean());
     cfg.view = View::DirectOnly;
-    let direct = render(&prepared, None, &cfg, &|_, _| {}).unwrap().mean();
+    let direct = render(&prepared, None, &cfg).unwrap().mean();
     // Indirect light is a real part of the Cornell box (a sanity check, not
     // a statistical bound: direct / full is ~0.6, and its noise ~1 %).
     assert!(
@@ -350,9 +344,9 @@ fn tiny_render_round_trips_through_exr_and_is_deterministic() {
     let mut cfg = RenderConfig::new(7, 5);
     cfg.spp = 2;
     cfg.seed = crate::common::seed(1);
-    let img = render(&prepared, Some(&m), &cfg, &|_, _| {}).unwrap();
+    let img = render(&prepared, Some(&m), &cfg).unwrap();
     let pool = adaptive_pm::embree::thread_pool(1).unwrap();
-    let again = pool.install(|| render(&prepared, Some(&m), &cfg, &|_, _| {}).unwrap());
+    let again = pool.install(|| render(&prepared, Some(&m), &cfg).unwrap());
     assert_eq!(img, again, "one thread and many give the same image");
     assert!(img.pixels.iter().all(|p| p.is_finite()));
     assert!(img.mean().max_element() > 0.0);
@@ -375,13 +369,13 @@ fn bad_sizes_and_paths_are_clear_errors_without_partial_files() {
     let prepared = Arc::new(scene.clone().commit(&device).unwrap());
     for (w, h) in [(0, 4), (4, 0), (20_000, 4), (16_384, 16_384 + 1)] {
         let cfg = RenderConfig::new(w, h);
-        let e = render(&prepared, None, &cfg, &|_, _| {}).unwrap_err();
+        let e = render(&prepared, None, &cfg).unwrap_err();
         assert!(matches!(e, Error::InvalidParameter { .. }), "{w}x{h}: {e}");
     }
     // A map view without a map.
     let mut cfg = RenderConfig::new(4, 4);
     cfg.view = View::Full;
-    assert!(render(&prepared, None, &cfg, &|_, _| {}).is_err());
+    assert!(render(&prepared, None, &cfg).is_err());
     cfg.spp = 0;
     assert!(cfg.validate().is_err());
 

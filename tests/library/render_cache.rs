@@ -393,9 +393,9 @@ fn gather_through_the_cache_keeps_the_mean() {
     cfg.spp = 16;
     cfg.view = View::Full;
     cfg.seed = crate::common::seed(1);
-    let cached = render(&prepared, Some(&maps), &cfg, &|_, _| {}).unwrap();
+    let cached = render(&prepared, Some(&maps), &cfg).unwrap();
     cfg.cache_stride = 0;
-    let knn = render(&prepared, Some(&maps), &cfg, &|_, _| {}).unwrap();
+    let knn = render(&prepared, Some(&maps), &cfg).unwrap();
     assert!(cached.pixels.iter().all(|p| p.is_finite()));
     let allowance = 0.0075;
     for (c, name) in ["red", "green", "blue"].iter().enumerate() {
@@ -439,15 +439,15 @@ fn full_only_maps_serve_the_default_render_and_refuse_the_others() {
     rc.spp = 2;
     rc.seed = crate::common::seed(1);
     assert!(!rc.reads_split_maps());
-    let a = render(&prepared, Some(&all), &rc, &|_, _| {}).unwrap();
-    let b = render(&prepared, Some(&full), &rc, &|_, _| {}).unwrap();
+    let a = render(&prepared, Some(&all), &rc).unwrap();
+    let b = render(&prepared, Some(&full), &rc).unwrap();
     assert_eq!(a.pixels, b.pixels);
     for view in [View::Map { primary_only: true }, View::Full] {
         let mut c = rc.clone();
         c.view = view;
         c.final_gather = 0;
         assert!(c.reads_split_maps());
-        match render(&prepared, Some(&full), &c, &|_, _| {}) {
+        match render(&prepared, Some(&full), &c) {
             Err(Error::InvalidParameter { name, reason }) => {
                 assert!(
                     name.contains("photon map") && reason.contains("full-only"),

@@ -200,9 +200,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Vec3::Y,
         75.0,
     )?);
-    let image_embree =
-        pool.install(|| render(embree.tracer.prepared(), Some(&maps), &rc, &|_, _| {}))?;
-    let image_own = pool.install(|| render(own.tracer.prepared(), Some(&maps), &rc, &|_, _| {}))?;
+    let image_embree = pool.install(|| render(embree.tracer.prepared(), Some(&maps), &rc))?;
+    let image_own = pool.install(|| render(own.tracer.prepared(), Some(&maps), &rc))?;
     let (me, mo) = (image_embree.mean(), image_own.mean());
     println!("image mean: embree {:.4}, own caster {:.4}", me.x, mo.x);
     check(

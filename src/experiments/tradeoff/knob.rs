@@ -78,7 +78,7 @@ pub fn choose_quality(
         let maps = RenderMaps::build(&out.records());
         let mut c = rc.clone();
         c.k = k_for(n);
-        render(prepared, Some(&maps), &c, &|_, _| {})?;
+        render(prepared, Some(&maps), &c)?;
         let secs = t.elapsed().as_secs_f64();
         pilots.push((n, secs, estimated_error(prepared, mode, n, 1, &pts)?));
     }

@@ -117,10 +117,10 @@ pub(crate) fn measure(
     let mut rc = cfg.render_config(cfg.spp, seed);
     rc.k = k;
     let t = Instant::now();
-    let full = render(prepared, Some(&maps), &rc, &|_, _| {})?;
+    let full = render(prepared, Some(&maps), &rc)?;
     let render_s = t.elapsed().as_secs_f64();
     rc.view = View::DirectOnly;
-    let direct = render(prepared, Some(&maps), &rc, &|_, _| {})?;
+    let direct = render(prepared, Some(&maps), &rc)?;
     let mut indirect = full.clone();
     for (p, d) in indirect.pixels.iter_mut().zip(&direct.pixels) {
         *p = (*p - *d).max(glam::Vec3::ZERO);
