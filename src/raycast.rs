@@ -7,12 +7,20 @@
 //! module, the scene model and the engine's shading build without it.
 //!
 //! Contract of an implementation:
-//! - `Hit::material` indexes the [`Scene`]'s materials (an out-of-range index
-//!   makes the trace fail with [`crate::Error::InvalidScene`], never a panic);
+//! - `Hit::material` indexes the [`Scene`]'s materials;
+//! - `Hit::geom_id` is the index of the hit mesh in the scene and
+//!   `Hit::prim_id` the triangle's index in it (the renderer interpolates
+//!   that triangle's vertex normals);
 //! - `Hit::ng` is the unit geometric normal, on either side (surfaces are
 //!   two-sided: the engine flips it towards the incoming photon);
 //! - `Hit::t` is in units of `Ray::dir`, within `[tnear, tfar]`;
 //! - a ray that is not finite misses (and is not occluded).
+//!
+//! A hit that breaks the contract (an index the scene does not have, a `t`
+//! that is NaN or outside the segment, a normal that is not finite and
+//! non-zero: [`BadHit`]) makes the trace and the render fail with
+//! [`crate::Error::InvalidScene`] naming it, never a panic or a silently
+//! wrong map.
 
 use crate::error::Result;
 use crate::scene::Scene;
@@ -88,7 +96,74 @@ pub struct Hit {
     pub material: u32,
 }
 
+/// How a caster's hit broke the contract of [`RayCaster`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BadHit {
+    /// A material index the scene does not have.
+    Material(u32),
+    /// A `geom_id` / `prim_id` pair the scene does not have.
+    Primitive(u32, u32),
+    /// A `t` that is NaN or outside `[tnear, tfar]`.
+    Distance(f32),
+    /// A normal that is not finite, or zero.
+    Normal(Vec3),
+}
+
+impl std::fmt::Display for BadHit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BadHit::Material(m) => {
+                write!(f, "a hit on material {m}, which the scene does not have")
+            }
+            BadHit::Primitive(g, p) => {
+                write!(
+                    f,
+                    "a hit on triangle {p} of mesh {g}, which the scene does not have"
+                )
+            }
+            BadHit::Distance(t) => write!(f, "a hit at t = {t}, outside the ray's segment"),
+            BadHit::Normal(n) => {
+                write!(f, "a hit with the normal {n}, not a finite non-zero vector")
+            }
+        }
+    }
+}
+
+impl BadHit {
+    /// The error a trace or render ends with.
+    pub fn into_error(self, scene: &Scene) -> crate::Error {
+        crate::Error::InvalidScene(format!(
+            "the ray caster reported {self} ({} meshes, {} materials): it breaks the \
+             RayCaster contract or was built from another scene",
+            scene.meshes.len(),
+            scene.materials.len()
+        ))
+    }
+}
+
 impl Hit {
+    /// Checks this hit of `ray` against the caster contract and `scene`.
+    ///
+    /// # Errors
+    /// The first [`BadHit`] found.
+    #[inline]
+    pub fn check(&self, ray: &Ray, scene: &Scene) -> std::result::Result<(), BadHit> {
+        if !(self.t >= ray.tnear && self.t <= ray.tfar) {
+            return Err(BadHit::Distance(self.t));
+        }
+        if !self.ng.is_finite() || self.ng == Vec3::ZERO {
+            return Err(BadHit::Normal(self.ng));
+        }
+        let mesh = scene.meshes.get(self.geom_id as usize);
+        if mesh.is_none_or(|m| self.prim_id as usize >= m.indices.len()) {
+            return Err(BadHit::Primitive(self.geom_id, self.prim_id));
+        }
+        if self.material as usize >= scene.materials.len() {
+            return Err(BadHit::Material(self.material));
+        }
+        Ok(())
+    }
+
     /// The geometric normal on the side that a ray travelling along `dir`
     /// comes from: `-ng` when `dir` runs along `ng` (the ray arrives from
     /// behind), else `ng`. `facing(-out)` is the side a ray leaving along
@@ -181,3 +256,51 @@ macro_rules! forward_caster {
 // One Embree scene shared by several prepared scenes (say, the same geometry
 // with different light profiles), or a caster behind a trait object.
 forward_caster!(&C, Arc<C>, Box<C>);
+
+/// A caster whose every hit is checked against the scene ([`Hit::check`]):
+/// the first bad hit is kept and its ray reported as a miss, and
+/// [`CheckedCaster::result`] turns it into the error the render ends with.
+/// The renderer reads its rays through one, so a caster of the user's that
+/// breaks the contract fails the render instead of blackening pixels.
+pub(crate) struct CheckedCaster<'a> {
+    scene: &'a Scene,
+    inner: &'a dyn RayCaster,
+    bad: std::sync::OnceLock<BadHit>,
+}
+
+impl<'a> CheckedCaster<'a> {
+    pub(crate) fn new(scene: &'a Scene, inner: &'a dyn RayCaster) -> Self {
+        CheckedCaster {
+            scene,
+            inner,
+            bad: std::sync::OnceLock::new(),
+        }
+    }
+
+    /// `Ok` unless a hit broke the contract.
+    pub(crate) fn result(&self) -> Result<()> {
+        match self.bad.get() {
+            Some(bad) => Err(bad.into_error(self.scene)),
+            None => Ok(()),
+        }
+    }
+}
+
+impl RayCaster for CheckedCaster<'_> {
+    #[inline]
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let h = self.inner.intersect(ray)?;
+        match h.check(ray, self.scene) {
+            Ok(()) => Some(h),
+            Err(bad) => {
+                let _ = self.bad.set(bad);
+                None
+            }
+        }
+    }
+
+    #[inline]
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.inner.occluded(ray)
+    }
+}

@@ -8,7 +8,7 @@ use super::counts::{plan_emission, LightPlan};
 use super::density_control::DensityControl;
 use super::report::TraceReport;
 use super::stream::Schedule;
-use super::wave::{PathState, ShadeContext};
+use super::wave::{BatchOut, PathState, ShadeContext};
 use crate::analysis::{AnalysisCache, DirectionalityTable};
 use crate::error::{Error, Result};
 use crate::photon_map::{CompactPhoton, PhotonMap, PhotonRecord, Quantizer};
@@ -230,22 +230,10 @@ impl<C: RayCaster> Tracer<C> {
         scene.validate()?;
         let (plans, tables) = self.analyse(cfg)?;
         let n_max = cfg.n_max();
-        // Checked (issue 12): two lights of ~2^63 photons each overflowed u64.
-        // The budget is per shard: only this shard's photons are traced.
         let shard = cfg.settings().shard;
-        let emitted: u64 = plans
-            .iter()
-            .try_fold(0u64, |a, p| a.checked_add(shard.len_of(p.photons)))
-            .unwrap_or(u64::MAX);
+        let emitted = emitted_within_budget(&plans, cfg)?;
         let budget_bytes = cfg.memory_budget();
         let max_photons = budget_bytes / BYTES_PER_STORED_PHOTON;
-        if emitted > max_photons {
-            return Err(Error::Budget {
-                photons: emitted,
-                needed_bytes: emitted.saturating_mul(BYTES_PER_STORED_PHOTON),
-                budget_bytes,
-            });
-        }
         let albedo: Vec<AlbedoTable> = scene
             .materials
             .iter()
@@ -262,21 +250,7 @@ impl<C: RayCaster> Tracer<C> {
         let mut report = TraceReport::new(cfg.mode(), n_max, &plans, kernels);
         let frame = map_frame(scene, &plans);
         let start = Instant::now();
-        let mut density = match cfg.mode() {
-            Mode::Density if emitted > 0 => {
-                let target = match cfg.density_target() {
-                    DensityTarget::PerArea(d) => d,
-                    DensityTarget::Auto => {
-                        n_max as f64 / scene.surface_sampler().total_area().max(f64::MIN_POSITIVE)
-                    }
-                };
-                Some(
-                    DensityControl::new(scene.bounds(), target, DENSITY_CONTROL_K)?
-                        .with_power_cap(frame.power_scale() as f32),
-                )
-            }
-            _ => None,
-        };
+        let mut density = density_control(scene, cfg, emitted, &frame)?;
         // The map buffer, reserved for what a diffuse scene typically
         // stores (about 2-3 hits per emitted photon) and grown when needed up
         // to the budget: a large buffer grows by mremap in glibc, without a
@@ -306,31 +280,16 @@ impl<C: RayCaster> Tracer<C> {
                 splitting = false;
                 report.budget_bound = true;
             }
-            // The children of this wave must fit in what is left of that half
-            // too, or one wave of splitting alone could exhaust memory (a
-            // sharp light at a high Q: few photons, each split many times).
-            // `s <= alpha_E(photon) N_MAX` (alpha_D <= 1), so the sum of that
-            // bound over the wave caps the children; when it exceeds the
-            // room left, every `s` of this wave is scaled down to fit.
-            let mut split_scale = 1.0;
-            if splitting {
+            let split_scale = if splitting {
                 let room = ((max_photons / 2).saturating_sub(used) / (path_cost + 1)) as f64;
                 let bound = split_bound(&wave, max_light_luminance, n_max, cfg.split_cap());
-                if bound > room {
-                    split_scale = room / bound;
-                    report.budget_bound = true;
-                }
-            }
-            // Every photon of the wave may store once: stop before the
-            // buffer could overflow.
-            if density.is_none() && photons.len() + wave_len > photons.capacity() {
-                if (photons.len() + wave_len) as u64 > max_photons {
-                    report.budget_bound = true;
-                    break;
-                }
-                let more = (photons.capacity().max(wave_len) as u64)
-                    .min(max_photons - photons.len() as u64) as usize;
-                reserve(&mut photons, more, budget_bytes)?;
+                wave_split_scale(room, bound, &mut report)
+            } else {
+                1.0
+            };
+            if density.is_none() && !room_for_wave(&mut photons, wave_len, budget_bytes)? {
+                report.budget_bound = true;
+                break;
             }
             let ctx = ShadeContext {
                 scene,
@@ -352,24 +311,8 @@ impl<C: RayCaster> Tracer<C> {
                 depth: depth as u8,
             };
             let outs = trace_wave(&ctx, &wave, &mut photons, cfg.batch(), density.is_some());
-            if let Some(m) = outs.iter().find_map(|o| o.bad_material) {
-                return Err(Error::InvalidScene(format!(
-                    "the ray caster reported a hit on material {m}, but the scene has {} materials",
-                    scene.materials.len()
-                )));
-            }
-            let stats = report.depth_mut(depth);
-            for out in outs {
-                stats.hits += out.hits;
-                stats.escaped += out.escaped;
-                stats.capped += out.capped;
-                stats.children += out.children.len() as u64;
-                if let Some(dc) = &mut density {
-                    dc.offer(&out.records, &out.normals);
-                }
-                schedule.pending[depth + 1].push_chunk(out.children);
-            }
-            stats.seconds += wave_start.elapsed().as_secs_f64();
+            absorb_wave(scene, outs, depth, &mut report, &mut density, &mut schedule)?;
+            report.depth_mut(depth).seconds += wave_start.elapsed().as_secs_f64();
             progress(Progress {
                 depth: depth as u32,
                 done: schedule.emitted_so_far(),
@@ -377,16 +320,7 @@ impl<C: RayCaster> Tracer<C> {
             });
         }
         if let Some(dc) = density {
-            let (accepted, rejected) = dc.counts();
-            report.density_rejected = rejected;
-            report.density_accepted = accepted;
-            let records = dc.into_records();
-            photons = records
-                .par_iter()
-                .with_min_len(4096)
-                .filter(|r| r.position.is_finite() && r.power.is_finite())
-                .map(|r| frame.encode(r))
-                .collect();
+            photons = density_photons(dc, &frame, &mut report);
         }
         // Give back the reserved room never used (a large buffer shrinks in
         // place: glibc's realloc of an mmap'd block is an mremap, no copy).
@@ -404,6 +338,130 @@ impl<C: RayCaster> Tracer<C> {
 
 /// Reserves room for `more` photons (within the budget: checked by the
 /// callers), or says the system refused it.
+/// The photons this shard emits, refused when they alone would not fit in
+/// the memory budget. Checked: two lights of ~2^63 photons each overflowed
+/// u64. The budget is per shard: only this shard's photons are traced.
+fn emitted_within_budget(plans: &[LightPlan], cfg: &CheckedConfig) -> Result<u64> {
+    let shard = cfg.settings().shard;
+    let emitted: u64 = plans
+        .iter()
+        .try_fold(0u64, |a, p| a.checked_add(shard.len_of(p.photons)))
+        .unwrap_or(u64::MAX);
+    let budget_bytes = cfg.memory_budget();
+    if emitted > budget_bytes / BYTES_PER_STORED_PHOTON {
+        return Err(Error::Budget {
+            photons: emitted,
+            needed_bytes: emitted.saturating_mul(BYTES_PER_STORED_PHOTON),
+            budget_bytes,
+        });
+    }
+    Ok(emitted)
+}
+
+/// Density control's grid, in density mode when anything is emitted.
+fn density_control(
+    scene: &Scene,
+    cfg: &CheckedConfig,
+    emitted: u64,
+    frame: &Quantizer,
+) -> Result<Option<DensityControl>> {
+    if cfg.mode() != Mode::Density || emitted == 0 {
+        return Ok(None);
+    }
+    let target = match cfg.density_target() {
+        DensityTarget::PerArea(d) => d,
+        DensityTarget::Auto => {
+            cfg.n_max() as f64 / scene.surface_sampler().total_area().max(f64::MIN_POSITIVE)
+        }
+    };
+    Ok(Some(
+        DensityControl::new(scene.bounds(), target, DENSITY_CONTROL_K)?
+            .with_power_cap(frame.power_scale() as f32),
+    ))
+}
+
+/// The factor on every `s` of a wave. Its children must fit in what is left
+/// of half the budget (`room`, in paths), or one wave of splitting alone
+/// could exhaust memory (a sharp light at a high Q: few photons, each split
+/// many times). `s <= alpha_E(photon) N_MAX` (alpha_D <= 1), so `bound`, the
+/// sum of that over the wave, caps the children; when it exceeds the room
+/// left, every `s` of the wave is scaled down to fit.
+fn wave_split_scale(room: f64, bound: f64, report: &mut TraceReport) -> f64 {
+    if bound > room {
+        report.budget_bound = true;
+        room / bound
+    } else {
+        1.0
+    }
+}
+
+/// A traced wave's counts into the report, its records offered to density
+/// control, its children queued for the next depth; a hit on a material the
+/// scene lacks (a user's caster) is an error.
+fn absorb_wave(
+    scene: &Scene,
+    outs: Vec<BatchOut>,
+    depth: usize,
+    report: &mut TraceReport,
+    density: &mut Option<DensityControl>,
+    schedule: &mut Schedule,
+) -> Result<()> {
+    if let Some(bad) = outs.iter().find_map(|o| o.bad_hit) {
+        return Err(bad.into_error(scene));
+    }
+    let stats = report.depth_mut(depth);
+    for out in outs {
+        stats.hits += out.hits;
+        stats.escaped += out.escaped;
+        stats.capped += out.capped;
+        stats.children += out.children.len() as u64;
+        if let Some(dc) = density {
+            dc.offer(&out.records, &out.normals);
+        }
+        schedule.pending[depth + 1].push_chunk(out.children);
+    }
+    Ok(())
+}
+
+/// Density control's accepted records, encoded (non-finite ones dropped),
+/// with its counts in the report.
+fn density_photons(
+    dc: DensityControl,
+    frame: &Quantizer,
+    report: &mut TraceReport,
+) -> Vec<CompactPhoton> {
+    let (accepted, rejected) = dc.counts();
+    report.density_rejected = rejected;
+    report.density_accepted = accepted;
+    dc.into_records()
+        .par_iter()
+        .with_min_len(4096)
+        .filter(|r| r.position.is_finite() && r.power.is_finite())
+        .map(|r| frame.encode(r))
+        .collect()
+}
+
+/// Every photon of a wave may store once: grows the buffer to hold
+/// `wave_len` more, or says `false` when that would overflow the budget
+/// (the run stops before it could).
+fn room_for_wave(
+    photons: &mut Vec<CompactPhoton>,
+    wave_len: usize,
+    budget_bytes: u64,
+) -> Result<bool> {
+    let max_photons = budget_bytes / BYTES_PER_STORED_PHOTON;
+    if photons.len() + wave_len <= photons.capacity() {
+        return Ok(true);
+    }
+    if (photons.len() + wave_len) as u64 > max_photons {
+        return Ok(false);
+    }
+    let more =
+        (photons.capacity().max(wave_len) as u64).min(max_photons - photons.len() as u64) as usize;
+    reserve(photons, more, budget_bytes)?;
+    Ok(true)
+}
+
 fn reserve(photons: &mut Vec<CompactPhoton>, more: usize, budget_bytes: u64) -> Result<()> {
     photons
         .try_reserve_exact(more)

@@ -13,7 +13,7 @@ use super::albedo::AlbedoTable;
 use super::counts::{expected_children, round_stochastic};
 use crate::analysis::DirectionalityTable;
 use crate::photon_map::{CompactPhoton, PhotonRecord, Quantizer};
-use crate::raycast::{Hit, Ray, RayCaster};
+use crate::raycast::{BadHit, Hit, Ray, RayCaster};
 use crate::rng::{hash2, Rng};
 use crate::sampling::{luminance, Frame};
 use crate::scene::{consistent_with_geometry, Scene};
@@ -78,8 +78,8 @@ pub(super) struct BatchOut {
     pub hits: u64,
     pub escaped: u64,
     pub capped: u64,
-    /// A material index the scene does not have, reported by the caster.
-    pub bad_material: Option<u32>,
+    /// The first hit of the batch that broke the caster contract.
+    pub bad_hit: Option<BadHit>,
 }
 
 /// Per-worker buffers reused from batch to batch.
@@ -119,10 +119,18 @@ pub(super) fn shade_batch<C: RayCaster>(
         children: Vec::with_capacity(batch.len()),
         ..BatchOut::default()
     };
-    for (p, hit) in batch.iter().zip(&scratch.hits) {
+    for ((p, hit), ray) in batch.iter().zip(&scratch.hits).zip(&scratch.rays) {
         match hit {
             None => out.escaped += 1,
-            Some(h) => shade_hit(ctx, p, h, slots, &mut out),
+            // A caster of the user's may report anything: a hit that breaks
+            // the contract ends the run with an error (see the tracer),
+            // never a panic or a photon stored at a NaN.
+            Some(h) => match h.check(ray, ctx.scene) {
+                Ok(()) => shade_hit(ctx, p, h, slots, &mut out),
+                Err(bad) => {
+                    out.bad_hit.get_or_insert(bad);
+                }
+            },
         }
     }
     out
@@ -138,10 +146,8 @@ fn shade_hit<C>(
     out.hits += 1;
     let position = p.origin + p.direction * h.t;
     let material = h.material as usize;
-    // A caster of the user's may report any index: an unknown one ends the
-    // run with an error (see the tracer), never a panic.
+    // Checked by `Hit::check`; `get` keeps a missed case a stop, not a panic.
     let Some(brdf) = ctx.scene.materials.get(material).map(|m| &m.brdf) else {
-        out.bad_material.get_or_insert(h.material);
         return;
     };
     let from_inside = h.ng.dot(p.direction) > 0.0;

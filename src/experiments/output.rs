@@ -213,10 +213,28 @@ claims.md                the claims as a Markdown table (the README's results ta
 /// [`Error::Io`] naming the directory or file that could not be created or written.
 pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+    let mut files = write_density_tables(r, dir)?;
+    files.extend(write_run_tables(r, dir)?);
+    let claims = check_claims(r);
+    let summary = serde_json::json!({ "results": r, "claims": claims });
+    files.push(write(dir, "summary.json", &summary.to_string())?);
+    files.push(write(dir, "claims.md", &claims_markdown(r))?);
+    files.push(write(dir, "README.txt", README)?);
+
+    for (stem, plot) in PLOT_STEMS.iter().zip(&figures(r)) {
+        let p = dir.join(stem);
+        write_plot(&p, plot)?;
+        files.push(p.with_extension("svg"));
+        files.push(p.with_extension("png"));
+    }
+    Ok(files)
+}
+
+/// The density figures' tables (Fig. 7a, 7b, 8, 9a): `CSV_FILES[0..4]`.
+fn write_density_tables(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     let ns = || 0..r.n_values.len();
     let reference = r.reference_max_density();
-
     let rows = ns().map(|i| {
         let mut v = vec![r.n_values[i].to_string()];
         v.extend(per_mode(r, i, |x| x.max_density_primary));
@@ -283,6 +301,13 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
         ),
     )?);
 
+    Ok(files)
+}
+
+/// The split rates by depth, every run's row and the light's alpha_D:
+/// `CSV_FILES[4..7]`.
+fn write_run_tables(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
     let adaptive = r.mode_runs(Mode::Adaptive);
     let mut rows = Vec::new();
     for x in &adaptive {
@@ -335,12 +360,13 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
         ),
     )?);
 
-    let claims = check_claims(r);
-    let summary = serde_json::json!({ "results": r, "claims": claims });
-    files.push(write(dir, "summary.json", &summary.to_string())?);
-    files.push(write(dir, "claims.md", &claims_markdown(r))?);
-    files.push(write(dir, "README.txt", README)?);
+    Ok(files)
+}
 
+/// The paper's figures 7 to 9 and the light's alpha_D, in [`PLOT_STEMS`] order.
+fn figures(r: &CornellResults) -> Vec<Plot> {
+    let reference = r.reference_max_density();
+    let adaptive = r.mode_runs(Mode::Adaptive);
     let sweep = format!("{}, N_MAX = {}, seed {}", r.scene, r.n_max, r.seed);
     let ref_name = |what: &str, y: f64| {
         format!(
@@ -349,7 +375,7 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
         )
     };
     let x_label = "n (exponent of the light's cos^n radiance)".to_string();
-    let plots = [
+    vec![
         Plot {
             title: format!("Fig. 7a: max density of the primary map ({sweep})"),
             x_label: x_label.clone(),
@@ -448,14 +474,7 @@ pub fn write_outputs(r: &CornellResults, dir: &Path) -> Result<Vec<PathBuf>> {
             }],
             log_y: false,
         },
-    ];
-    for (stem, plot) in PLOT_STEMS.iter().zip(&plots) {
-        let p = dir.join(stem);
-        write_plot(&p, plot)?;
-        files.push(p.with_extension("svg"));
-        files.push(p.with_extension("png"));
-    }
-    Ok(files)
+    ]
 }
 
 /// The claims as a Markdown table (written as `claims.md`; the README's

@@ -190,10 +190,146 @@ fn noise_free(e: f64, noise: f64) -> f64 {
 /// Bisection steps after the doubling search brackets the target spp.
 pub const REFINE: u32 = 3;
 
+/// What every render is judged against: the path-traced reference over the
+/// pixels kept, and over the caustic's pixels, each with its own noise.
+struct Judge {
+    reference: Image,
+    keep: Vec<bool>,
+    noise: f64,
+    caustic_mask: Vec<bool>,
+    caustic_count: usize,
+    caustic_noise: f64,
+    /// Seconds the reference took.
+    seconds: f64,
+}
+
+impl Judge {
+    /// Renders the reference (two halves at `reference_spp / 2` each) and
+    /// finds the caustic's pixels.
+    fn new<C: RayCaster>(
+        prepared: &PreparedScene<C>,
+        base: &RenderConfig,
+        cfg: &StudyConfig,
+        log: &dyn Fn(&str),
+    ) -> Result<Self> {
+        let keep: Vec<bool> = light_pixels(prepared, base)?.iter().map(|l| !l).collect();
+        let t = Instant::now();
+        let mut rc = base.clone();
+        rc.spp = (cfg.reference_spp / 2).max(1);
+        rc.seed = cfg.seed ^ 0x5EF_E2E4CE;
+        let halves = PathHalves::render(prepared, &rc, PathPart::Full)?;
+        let reference = halves.mean();
+        let noise = halves.noise_rel(Some(&keep));
+        let seconds = t.elapsed().as_secs_f64();
+        log(&format!(
+            "reference: {} spp in {seconds:.1} s, noise {:.3} %",
+            cfg.reference_spp,
+            100.0 * noise
+        ));
+        halves.require_complete()?;
+        let caustic_mask =
+            caustic_pixels(prepared, base, cfg.reference_spp / 4, &reference, &keep)?;
+        let caustic_count = caustic_mask.iter().filter(|&&c| c).count();
+        let caustic_noise = halves.noise_rel(Some(&caustic_mask));
+        if caustic_count > 0 {
+            log(&format!(
+                "caustic: {caustic_count} pixels, reference noise {:.3} % there",
+                100.0 * caustic_noise
+            ));
+        }
+        Ok(Judge {
+            reference,
+            keep,
+            noise,
+            caustic_mask,
+            caustic_count,
+            caustic_noise,
+            seconds,
+        })
+    }
+
+    /// `img`'s relRMSE over the kept pixels, the reference's noise removed.
+    fn error(&self, img: &Image) -> Result<f64> {
+        Ok(noise_free(
+            relative_rmse_masked(img, &self.reference, &self.keep)?,
+            self.noise,
+        ))
+    }
+
+    /// The same over the caustic's pixels (`None` without any).
+    fn caustic_error(&self, img: &Image) -> Result<Option<f64>> {
+        if self.caustic_count == 0 {
+            return Ok(None);
+        }
+        Ok(Some(noise_free(
+            relative_rmse_masked(img, &self.reference, &self.caustic_mask)?,
+            self.caustic_noise,
+        )))
+    }
+}
+
+/// The path tracer's timed render: seconds, error, and extrapolated time
+/// to the target, over the whole image and over the caustic.
+struct PathTiming {
+    seconds: f64,
+    error: f64,
+    time_to_target: f64,
+    caustic: Option<(f64, f64)>,
+}
+
+fn time_path<C: RayCaster>(
+    prepared: &PreparedScene<C>,
+    base: &RenderConfig,
+    cfg: &StudyConfig,
+    judge: &Judge,
+    log: &dyn Fn(&str),
+) -> Result<PathTiming> {
+    let mut pc = base.clone();
+    pc.spp = cfg.path_spp;
+    let t = Instant::now();
+    let path = render_path(prepared, &pc, PathPart::Full)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let error = judge.error(&path)?;
+    if error <= 0.0 {
+        return Err(Error::param(
+            "reference_spp",
+            format!(
+                "the path render's error is within the reference's noise ({:.3} %): \
+                 raise the reference's spp (now {})",
+                100.0 * judge.noise,
+                cfg.reference_spp
+            ),
+        ));
+    }
+    // Unbiased: the error falls as 1/sqrt(spp).
+    let to_target = |e: f64| seconds * (e / cfg.target).powi(2);
+    let time_to_target = to_target(error);
+    log(&format!(
+        "path: {} spp in {seconds:.2} s, relRMSE {:.2} % -> {:.0} % in {time_to_target:.1} s",
+        cfg.path_spp,
+        100.0 * error,
+        100.0 * cfg.target
+    ));
+    let caustic = judge.caustic_error(&path)?.map(|e| (e, to_target(e)));
+    if let Some((e, t)) = caustic {
+        log(&format!(
+            "path over the caustic: relRMSE {:.2} % -> {:.0} % in {t:.1} s",
+            100.0 * e,
+            100.0 * cfg.target
+        ));
+    }
+    Ok(PathTiming {
+        seconds,
+        error,
+        time_to_target,
+        caustic,
+    })
+}
+
 /// Runs the benchmark on the scene of `tracer` on the current rayon pool
-/// (its caster renders too): the reference,
-/// the path tracer's timed render, then for each budget the photon render at
-/// rising spp until it reaches the target; `log` gets one line per step.
+/// (its caster renders too): the reference, the path tracer's timed render,
+/// then for each budget the photon render at rising spp until it reaches
+/// the target; `log` gets one line per step.
 ///
 /// # Errors
 /// Bad settings or a failed trace.
@@ -213,167 +349,24 @@ pub fn run_study<C: RayCaster>(
     base.show_emitters = false;
     base.validate()?;
     check_reference_spp(cfg.reference_spp, cfg.path_spp)?;
-    let keep: Vec<bool> = light_pixels(prepared, &base)?.iter().map(|l| !l).collect();
-
-    let t = Instant::now();
-    let mut rc = base.clone();
-    rc.spp = (cfg.reference_spp / 2).max(1);
-    rc.seed = cfg.seed ^ 0x5EF_E2E4CE;
-    let halves = PathHalves::render(prepared, &rc, PathPart::Full)?;
-    let reference = halves.mean();
-    let reference_noise = halves.noise_rel(Some(&keep));
-    let reference_s = t.elapsed().as_secs_f64();
-    log(&format!(
-        "reference: {} spp in {reference_s:.1} s, noise {:.3} %",
-        cfg.reference_spp,
-        100.0 * reference_noise
-    ));
-    halves.require_complete()?;
-    let caustic_mask = caustic_pixels(prepared, &base, cfg.reference_spp / 4, &reference, &keep)?;
-    let caustic_count = caustic_mask.iter().filter(|&&c| c).count();
-    let caustic_noise = halves.noise_rel(Some(&caustic_mask));
-    if caustic_count > 0 {
-        log(&format!(
-            "caustic: {caustic_count} pixels, reference noise {:.3} % there",
-            100.0 * caustic_noise
-        ));
-    }
-
-    let mut pc = base.clone();
-    pc.spp = cfg.path_spp;
-    let t = Instant::now();
-    let path = render_path(prepared, &pc, PathPart::Full)?;
-    let path_s = t.elapsed().as_secs_f64();
-    let path_err = noise_free(
-        relative_rmse_masked(&path, &reference, &keep)?,
-        reference_noise,
-    );
-    if path_err <= 0.0 {
-        return Err(Error::param(
-            "reference_spp",
-            format!(
-                "the path render's error is within the reference's noise ({:.3} %): \
-                 raise the reference's spp (now {})",
-                100.0 * reference_noise,
-                cfg.reference_spp
-            ),
-        ));
-    }
-    let path_time = path_s * (path_err / cfg.target).powi(2);
-    log(&format!(
-        "path: {} spp in {path_s:.2} s, relRMSE {:.2} % -> {:.0} % in {path_time:.1} s",
-        cfg.path_spp,
-        100.0 * path_err,
-        100.0 * cfg.target
-    ));
-    let caustic_err = |img: &Image| -> Result<Option<f64>> {
-        if caustic_count == 0 {
-            return Ok(None);
-        }
-        Ok(Some(noise_free(
-            relative_rmse_masked(img, &reference, &caustic_mask)?,
-            caustic_noise,
-        )))
-    };
-    let path_caustic = caustic_err(&path)?;
-    let path_caustic_time = path_caustic.map(|e| path_s * (e / cfg.target).powi(2));
-    if let (Some(e), Some(t)) = (path_caustic, path_caustic_time) {
-        log(&format!(
-            "path over the caustic: relRMSE {:.2} % -> {:.0} % in {t:.1} s",
-            100.0 * e,
-            100.0 * cfg.target
-        ));
-    }
-
+    let judge = Judge::new(prepared, &base, cfg, log)?;
+    let path = time_path(prepared, &base, cfg, &judge, log)?;
     let mut rows = Vec::new();
     for &n_max in &cfg.n_max {
-        let mut tc = TraceConfig::new(cfg.mode, Budget::NMax(n_max));
-        tc.seed = cfg.seed;
-        let t = Instant::now();
-        let out = tracer.trace(&tc)?;
-        let trace_s = t.elapsed().as_secs_f64();
-        let stored = out.photons.len();
-        let maps = base.build_maps(out.photons, out.frame);
-        let maps_s = maps.build_total_s();
-        let measure = |spp: u32, rows: &mut Vec<PhotonRow>| -> Result<bool> {
-            let mut c = base.clone();
-            c.spp = spp;
-            let t = Instant::now();
-            let (img, stats) = render_with(prepared, Some(&maps), None, &c, &|_, _| {})?;
-            let render_s = t.elapsed().as_secs_f64();
-            let row = photon_row(&img, &reference, &keep, reference_noise, n_max, spp)?;
-            let row = PhotonRow {
-                caustic_rel_rmse: caustic_err(&img)?,
-                photons: stored,
-                trace_s,
-                maps_s,
-                render_s,
-                cache_build_s: stats.cache_build_s,
-                lookup_s: stats.lookup_s,
-                total_s: trace_s + maps_s + render_s,
-                ..row
-            };
-            log(&format!(
-                "photon N_MAX {n_max}: {spp} spp, total {:.2} s (render {render_s:.2}), relRMSE {:.2} %{}, bias {:+.2} {:+.2} {:+.2} %",
-                row.total_s,
-                100.0 * row.rel_rmse,
-                row.caustic_rel_rmse
-                    .map_or(String::new(), |e| format!(" (caustic {:.2} %)", 100.0 * e)),
-                100.0 * row.bias[0],
-                100.0 * row.bias[1],
-                100.0 * row.bias[2]
-            ));
-            let reached =
-                row.rel_rmse <= cfg.target && row.caustic_rel_rmse.is_none_or(|e| e <= cfg.target);
-            rows.push(row);
-            Ok(reached)
-        };
-        if let Some(spp) = cfg.fixed_spp {
-            measure(spp, &mut rows)?;
-            continue;
-        }
-        // Doubling until the target is reached, then bisection between the
-        // last miss and the first hit (REFINE steps): the spp that reaches the
-        // target is measured to within 1/2^REFINE of the bracket, not
-        // rounded up to a power of two.
-        let (mut miss, mut spp) = (0, 8);
-        let mut hit = None;
-        while spp <= cfg.max_spp {
-            if measure(spp, &mut rows)? {
-                hit = Some(spp);
-                break;
-            }
-            miss = spp;
-            spp *= 2;
-        }
-        if let Some(mut hi) = hit {
-            for _ in 0..REFINE {
-                let mid = (miss + hi) / 2;
-                if mid <= miss || mid >= hi {
-                    break;
-                }
-                if measure(mid, &mut rows)? {
-                    hi = mid;
-                } else {
-                    miss = mid;
-                }
-            }
-        }
+        photon_budget(tracer, &base, cfg, &judge, n_max, log, &mut rows)?;
     }
-    let best = rows
-        .iter()
-        .filter(|r| r.rel_rmse <= cfg.target)
-        .map(|r| r.total_s)
-        .min_by(f64::total_cmp);
-    let caustic = path_caustic.zip(path_caustic_time).map(|(e, t)| {
-        let best = rows
-            .iter()
-            .filter(|r| r.caustic_rel_rmse.is_some_and(|c| c <= cfg.target))
+    let fastest = |reached: &dyn Fn(&PhotonRow) -> bool| {
+        rows.iter()
+            .filter(|r| reached(r))
             .map(|r| r.total_s)
-            .min_by(f64::total_cmp);
+            .min_by(f64::total_cmp)
+    };
+    let best = fastest(&|r| r.rel_rmse <= cfg.target);
+    let caustic = path.caustic.map(|(e, t)| {
+        let best = fastest(&|r| r.caustic_rel_rmse.is_some_and(|c| c <= cfg.target));
         CausticResult {
-            pixels: caustic_count,
-            reference_noise: caustic_noise,
+            pixels: judge.caustic_count,
+            reference_noise: judge.caustic_noise,
             path_rel_rmse: e,
             path_time_to_target_s: t,
             photon_time_to_target_s: best,
@@ -382,26 +375,103 @@ pub fn run_study<C: RayCaster>(
     });
     Ok(StudyResult {
         caustic,
-        reference_noise,
-        reference_s,
+        reference_noise: judge.noise,
+        reference_s: judge.seconds,
         path_spp: cfg.path_spp,
-        path_s,
-        path_rel_rmse: path_err,
-        path_time_to_target_s: path_time,
+        path_s: path.seconds,
+        path_rel_rmse: path.error,
+        path_time_to_target_s: path.time_to_target,
         photon: rows,
         photon_time_to_target_s: best,
-        ratio: best.map(|b| b / path_time),
+        ratio: best.map(|b| b / path.time_to_target),
     })
 }
 
-fn photon_row(
-    img: &Image,
-    reference: &Image,
-    keep: &[bool],
-    noise: f64,
+/// One budget: trace and build the maps (timed), then render at `fixed_spp`,
+/// or at doubling spp until the target is reached and by bisection between
+/// the last miss and the first hit ([`REFINE`] steps): the spp that reaches
+/// the target is measured to within 1/2^REFINE of the bracket, not rounded
+/// up to a power of two. Each render is a row of `rows`.
+fn photon_budget<C: RayCaster>(
+    tracer: &Tracer<C>,
+    base: &RenderConfig,
+    cfg: &StudyConfig,
+    judge: &Judge,
     n_max: u64,
-    spp: u32,
-) -> Result<PhotonRow> {
+    log: &dyn Fn(&str),
+    rows: &mut Vec<PhotonRow>,
+) -> Result<()> {
+    let mut tc = TraceConfig::new(cfg.mode, Budget::NMax(n_max));
+    tc.seed = cfg.seed;
+    let t = Instant::now();
+    let out = tracer.trace(&tc)?;
+    let trace_s = t.elapsed().as_secs_f64();
+    let stored = out.photons.len();
+    let maps = base.build_maps(out.photons, out.frame);
+    let maps_s = maps.build_total_s();
+    let mut measure = |spp: u32| -> Result<bool> {
+        let mut c = base.clone();
+        c.spp = spp;
+        let t = Instant::now();
+        let (img, stats) = render_with(tracer.prepared(), Some(&maps), None, &c, &|_, _| {})?;
+        let render_s = t.elapsed().as_secs_f64();
+        let row = PhotonRow {
+            caustic_rel_rmse: judge.caustic_error(&img)?,
+            photons: stored,
+            trace_s,
+            maps_s,
+            render_s,
+            cache_build_s: stats.cache_build_s,
+            lookup_s: stats.lookup_s,
+            total_s: trace_s + maps_s + render_s,
+            ..photon_row(&img, judge, n_max, spp)?
+        };
+        log(&format!(
+            "photon N_MAX {n_max}: {spp} spp, total {:.2} s (render {render_s:.2}), relRMSE {:.2} %{}, bias {:+.2} {:+.2} {:+.2} %",
+            row.total_s,
+            100.0 * row.rel_rmse,
+            row.caustic_rel_rmse
+                .map_or(String::new(), |e| format!(" (caustic {:.2} %)", 100.0 * e)),
+            100.0 * row.bias[0],
+            100.0 * row.bias[1],
+            100.0 * row.bias[2]
+        ));
+        let reached =
+            row.rel_rmse <= cfg.target && row.caustic_rel_rmse.is_none_or(|e| e <= cfg.target);
+        rows.push(row);
+        Ok(reached)
+    };
+    if let Some(spp) = cfg.fixed_spp {
+        measure(spp)?;
+        return Ok(());
+    }
+    let (mut miss, mut spp) = (0, 8);
+    let mut hit = None;
+    while spp <= cfg.max_spp {
+        if measure(spp)? {
+            hit = Some(spp);
+            break;
+        }
+        miss = spp;
+        spp *= 2;
+    }
+    if let Some(mut hi) = hit {
+        for _ in 0..REFINE {
+            let mid = (miss + hi) / 2;
+            if mid <= miss || mid >= hi {
+                break;
+            }
+            if measure(mid)? {
+                hi = mid;
+            } else {
+                miss = mid;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn photon_row(img: &Image, judge: &Judge, n_max: u64, spp: u32) -> Result<PhotonRow> {
     Ok(PhotonRow {
         n_max,
         photons: 0,
@@ -411,9 +481,9 @@ fn photon_row(
         render_s: 0.0,
         cache_build_s: 0.0,
         lookup_s: 0.0,
-        rel_rmse: noise_free(relative_rmse_masked(img, reference, keep)?, noise),
+        rel_rmse: judge.error(img)?,
         caustic_rel_rmse: None,
-        bias: mean_bias(img, reference, keep)?,
+        bias: mean_bias(img, &judge.reference, &judge.keep)?,
         total_s: 0.0,
     })
 }

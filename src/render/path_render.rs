@@ -14,7 +14,7 @@ use super::path::{PathPart, PathTracer};
 use super::run::RenderStats;
 use super::{Image, RenderConfig};
 use crate::error::Result;
-use crate::raycast::{Ray, RayCaster};
+use crate::raycast::{CheckedCaster, Ray, RayCaster};
 use crate::rng::{hash2, Rng};
 use crate::sampling::{cosine_hemisphere, Frame};
 use crate::scene::{Material, PreparedScene, Scene, SurfacePoint};
@@ -63,13 +63,15 @@ fn path_image(
 ) -> Result<(Image, RenderStats)> {
     cfg.validate()?;
     scene.validate()?;
+    let checked = CheckedCaster::new(scene, rt);
     let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
     let estimator = PathEstimator {
-        pt: PathTracer::over(scene, rt),
+        pt: PathTracer::over(scene, &checked),
         part,
         show_emitters: cfg.show_emitters,
     };
     let (image, dropped) = film::develop(cfg, &rays, &estimator, progress)?;
+    checked.result()?;
     let stats = RenderStats {
         samples: u64::from(image.width) * u64::from(image.height) * u64::from(cfg.spp),
         dropped_samples: dropped,

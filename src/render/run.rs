@@ -13,7 +13,7 @@ use super::CAUSTIC_RADIUS_FRACTION;
 use super::{default_max_radius, ray_epsilon, Image, RenderConfig, RenderMaps, View};
 use crate::engine::albedo::AlbedoTable;
 use crate::error::{Error, Result};
-use crate::raycast::RayCaster;
+use crate::raycast::{CheckedCaster, RayCaster};
 use crate::rng::Rng;
 use crate::scene::{PreparedScene, Scene};
 use glam::Vec3;
@@ -114,6 +114,8 @@ fn render_photons(
     cfg.validate()?;
     scene.validate()?;
     check_maps(cfg, maps)?;
+    let checked = CheckedCaster::new(scene, rt);
+    let rt: &dyn RayCaster = &checked;
     let max_radius = cfg.max_radius.unwrap_or_else(|| default_max_radius(scene));
     let lookup = Lookup {
         k: cfg.k,
@@ -169,6 +171,7 @@ fn render_photons(
         misses: AtomicU64::new(0),
     };
     let (image, dropped) = film::develop(cfg, &rays, &estimator, progress)?;
+    checked.result()?;
     let stats = RenderStats {
         samples: u64::from(image.width) * u64::from(image.height) * u64::from(cfg.spp),
         lookup_s: estimator.lookup_ns.into_inner() as f64 * 1e-9,

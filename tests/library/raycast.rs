@@ -5,6 +5,7 @@
 use adaptive_pm::embree::{thread_pool, CommittedScene, Device};
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::raycast::{Hit, Ray, RayCaster};
+use adaptive_pm::render::{render, render_path, PathPart, RenderConfig, View};
 use adaptive_pm::scene::{PreparedScene, Scene};
 use adaptive_pm::Error;
 use std::sync::Arc;
@@ -126,6 +127,64 @@ fn mismatches_are_errors_not_panics() {
     let rt = Arc::new(swapped.embree_geometry(&device).unwrap());
     assert!(PreparedScene::new(cornell, Arc::clone(&rt)).is_err());
     assert!(PreparedScene::new(swapped, rt).is_ok());
+}
+
+/// A caster that breaks the contract one way: Embree's hits, edited.
+struct Garbled(CommittedScene, fn(Hit) -> Hit);
+
+impl RayCaster for Garbled {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.0.intersect(ray).map(self.1)
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.0.occluded(ray)
+    }
+}
+
+/// A NaN distance, a normal of zero, a mesh or triangle the scene does not
+/// have, a material it does not have: the trace, the photon render and the
+/// path tracer each fail with an error naming the hit, never a map or an
+/// image quietly missing those photons or pixels.
+#[test]
+fn hits_that_break_the_contract_fail_the_trace_and_the_render() {
+    let device = Device::new().unwrap();
+    let cornell = Scene::cornell().unwrap();
+    let cases: [(fn(Hit) -> Hit, &str); 5] = [
+        (|h| Hit { t: f32::NAN, ..h }, "t = NaN"),
+        (
+            |h| Hit {
+                ng: glam::Vec3::ZERO,
+                ..h
+            },
+            "normal",
+        ),
+        (|h| Hit { geom_id: 999, ..h }, "mesh 999"),
+        (
+            |h| Hit {
+                prim_id: 1 << 30,
+                ..h
+            },
+            "triangle 1073741824",
+        ),
+        (|h| Hit { material: 42, ..h }, "material 42"),
+    ];
+    let mut rc = RenderConfig::new(8, 8);
+    rc.view = View::DirectOnly;
+    for (edit, says) in cases {
+        let caster = Garbled(cornell.embree_geometry(&device).unwrap(), edit);
+        let tracer = Tracer::new(PreparedScene::new(cornell.clone(), caster).unwrap());
+        let e = tracer
+            .trace(&TraceConfig::new(Mode::Classic, Budget::NMax(1000)))
+            .unwrap_err();
+        assert!(
+            matches!(e, Error::InvalidScene(_)) && e.to_string().contains(says),
+            "{e}"
+        );
+        let e = render(tracer.prepared(), None, &rc).unwrap_err();
+        assert!(e.to_string().contains(says), "photon render: {e}");
+        let e = render_path(tracer.prepared(), &rc, PathPart::Full).unwrap_err();
+        assert!(e.to_string().contains(says), "path tracer: {e}");
+    }
 }
 
 /// `src` with its first `meshes` meshes, their materials renamed by `material`.

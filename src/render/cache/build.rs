@@ -81,26 +81,7 @@ impl IrradianceCache {
             let e = cone_filter(full, scratch, cfg.lookup, |_, power| power);
             (e.value * scale, e.radius)
         };
-        // The cell side from the median radius of a spread subset of samples.
-        let probe_step = (samples.len() / 1024).max(1);
-        let mut radii: Vec<f32> = samples
-            .par_iter()
-            .step_by(probe_step)
-            .map_init(
-                || Vec::with_capacity(cfg.lookup.k),
-                |sc, &s| estimate(sc, s).1,
-            )
-            .collect();
-        let mid = radii.len() / 2;
-        let median = if radii.is_empty() {
-            cfg.lookup.max_radius
-        } else {
-            *radii.select_nth_unstable_by(mid, f32::total_cmp).1
-        };
-        let fraction = (SAMPLES_PER_CELL * PI * cfg.stride as f32 / cfg.lookup.k as f32).sqrt();
-        let cell = (fraction * median)
-            .max(1e-6 * diagonal)
-            .max(f32::MIN_POSITIVE);
+        let cell = cell_side(&samples, &estimate, cfg, diagonal);
         // Cell faces off the round coordinates that walls sit on (a floor at
         // y = 0 on a face would split its samples and lookups by the sign of
         // rounding errors): every level's faces are >= 0.14 h from 0.
@@ -130,13 +111,20 @@ impl IrradianceCache {
                 |sc, g| estimate(sc, samples[Self::pick(&samples, g) as usize]).0,
             )
             .collect();
-        // Coarser cells: the mean over the finest cells they hold, each counted
-        // once. A mean over samples would weight a cell's bright part by its
-        // extra photons (a mean of E weighted by E: too bright by Var E / E).
+        cache.fill(&samples, &groups, &values);
+        cache.build_s = t.elapsed().as_secs_f64();
+        Ok(cache)
+    }
+
+    /// Sizes the table and inserts the finest cells (`groups`, with their
+    /// `values`) and the coarser levels. A coarse cell holds the mean over
+    /// the finest cells inside it, each counted once: a mean over samples
+    /// would weight a cell's bright part by its extra photons (a mean of E
+    /// weighted by E: too bright by Var E / E).
+    fn fill(&mut self, samples: &[(Vec3, Vec3, u64)], groups: &[&[(u64, u32)]], values: &[Vec3]) {
         let mut keyed: Vec<(u64, u32)> = (1..LEVELS)
             .flat_map(|level| {
-                let cache = &cache;
-                let samples = &samples;
+                let cache = &*self;
                 groups.iter().enumerate().map(move |(gi, g)| {
                     let s = samples[g[0].1 as usize];
                     (cache.key(s.0, s.1, level), gi as u32)
@@ -147,17 +135,15 @@ impl IrradianceCache {
         let coarse = keyed.chunk_by(|a, b| a.0 == b.0).count();
         let cells = groups.len() + coarse;
         // Half full: 16 bytes per cell with 8-byte slots.
-        cache.slots = vec![Slot::default(); (2 * cells).max(2)];
-        cache.cells = cells;
-        for (g, v) in groups.iter().zip(&values) {
-            cache.insert(g[0].0, to_rgbe(*v));
+        self.slots = vec![Slot::default(); (2 * cells).max(2)];
+        self.cells = cells;
+        for (g, v) in groups.iter().zip(values) {
+            self.insert(g[0].0, to_rgbe(*v));
         }
         for group in keyed.chunk_by(|a, b| a.0 == b.0) {
             let sum: Vec3 = group.iter().map(|&(_, gi)| values[gi as usize]).sum();
-            cache.insert(group[0].0, to_rgbe(sum / group.len() as f32));
+            self.insert(group[0].0, to_rgbe(sum / group.len() as f32));
         }
-        cache.build_s = t.elapsed().as_secs_f64();
-        Ok(cache)
     }
 
     /// The sample whose estimate a finest cell holds: the one of `group`
@@ -169,6 +155,39 @@ impl IrradianceCache {
             .min_by_key(|&i| samples[i as usize].2)
             .unwrap_or(group[0].1)
     }
+}
+
+/// The finest cell's side: from the median kernel radius over a spread
+/// subset of the samples, sized so that a cell holds about
+/// [`SAMPLES_PER_CELL`] samples.
+fn cell_side<F>(
+    samples: &[(Vec3, Vec3, u64)],
+    estimate: &F,
+    cfg: &CacheConfig,
+    diagonal: f32,
+) -> f32
+where
+    F: Fn(&mut Vec<Neighbor>, (Vec3, Vec3, u64)) -> (Vec3, f32) + Sync,
+{
+    let probe_step = (samples.len() / 1024).max(1);
+    let mut radii: Vec<f32> = samples
+        .par_iter()
+        .step_by(probe_step)
+        .map_init(
+            || Vec::with_capacity(cfg.lookup.k),
+            |sc, &s| estimate(sc, s).1,
+        )
+        .collect();
+    let mid = radii.len() / 2;
+    let median = if radii.is_empty() {
+        cfg.lookup.max_radius
+    } else {
+        *radii.select_nth_unstable_by(mid, f32::total_cmp).1
+    };
+    let fraction = (SAMPLES_PER_CELL * PI * cfg.stride as f32 / cfg.lookup.k as f32).sqrt();
+    (fraction * median)
+        .max(1e-6 * diagonal)
+        .max(f32::MIN_POSITIVE)
 }
 
 /// The normal of the surface a photon travelling along `dir` landed on at
