@@ -7,8 +7,8 @@ use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
 use adaptive_pm::output::refuse_overwrite;
 use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
-    cache::DEFAULT_STRIDE, check_output_path, render_with, tile_rows, Image, Integrator,
-    RenderConfig, RenderMaps, RenderStats, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
+    cache::DEFAULT_STRIDE, check_output_path, render_checked, tile_rows, CheckedRender, Image,
+    Integrator, RenderConfig, RenderMaps, RenderStats, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
 };
 use anyhow::Context;
 use serde_json::json;
@@ -117,7 +117,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     bar.set_message("render");
     let t = Instant::now();
     let (image, stats) = pool.install(|| {
-        render_with(&*prepared, maps.as_ref(), None, &cfg, &|done, _| {
+        render_checked(&*prepared, maps.as_ref(), None, &cfg, &|done, _| {
             bar.set_position(done)
         })
     })?;
@@ -142,8 +142,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The render settings the arguments ask for, checked.
-fn render_config(args: &RenderArgs) -> anyhow::Result<RenderConfig> {
+/// The render settings the arguments ask for, checked (once: the render
+/// runs on them as they are).
+fn render_config(args: &RenderArgs) -> anyhow::Result<CheckedRender> {
     let mut cfg = RenderConfig::new(args.width, args.height);
     cfg.spp = args.spp;
     cfg.final_gather = args.final_gather;
@@ -164,8 +165,7 @@ fn render_config(args: &RenderArgs) -> anyhow::Result<RenderConfig> {
     cfg.seed = args.budget.seed;
     cfg.rows = args.tile.map(|t| tile_rows(t, args.height));
     // Fail before any work: bad sizes.
-    cfg.validate()?;
-    Ok(cfg)
+    Ok(cfg.check()?)
 }
 
 /// Fails before any work on a missing folder, an unwritable path, or an

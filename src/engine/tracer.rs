@@ -226,8 +226,8 @@ impl<C: RayCaster> Tracer<C> {
         cfg: &CheckedConfig,
         progress: &(dyn Fn(Progress) + Sync),
     ) -> Result<TraceOutput> {
+        // Checked once, when it was prepared.
         let scene = self.prepared.scene();
-        scene.validate()?;
         let (plans, tables) = self.analyse(cfg)?;
         let n_max = cfg.n_max();
         let shard = cfg.settings().shard;

@@ -347,7 +347,7 @@ pub fn run_study<C: RayCaster>(
     // Emitters seen from the camera are exact in both renderers, but the
     // jittered edge of a bright light would dominate any image RMSE.
     base.show_emitters = false;
-    base.validate()?;
+    base.check()?;
     check_reference_spp(cfg.reference_spp, cfg.path_spp)?;
     let judge = Judge::new(prepared, &base, cfg, log)?;
     let path = time_path(prepared, &base, cfg, &judge, log)?;
@@ -521,7 +521,7 @@ pub fn run_direct_study<C: RayCaster>(
     base.height = cfg.size;
     base.seed = cfg.seed;
     base.show_emitters = false;
-    base.validate()?;
+    base.check()?;
     check_reference_spp(cfg.reference_spp, spp)?;
     let keep: Vec<bool> = light_pixels(prepared, &base)?.iter().map(|l| !l).collect();
     let mut rc = base.clone();

@@ -9,7 +9,7 @@
 //! image does not depend on the thread count or the tiling.
 
 use super::camera::CameraRays;
-use super::{Image, RenderConfig};
+use super::{CheckedRender, Image};
 use crate::error::Result;
 use crate::raycast::Ray;
 use crate::rng::{hash2, Rng};
@@ -69,9 +69,9 @@ pub(super) fn camera_ray(rays: &CameraRays, sample: Sample, [jx, jy]: [f32; 2]) 
 /// and the number of samples dropped as NaN or infinite.
 ///
 /// # Errors
-/// [`crate::Error::InvalidParameter`] for an image size [`Image::new`] refuses.
+/// What [`Image::new`] refuses (memory the system will not give).
 pub(super) fn develop<E: PixelEstimator>(
-    cfg: &RenderConfig,
+    cfg: &CheckedRender,
     rays: &CameraRays,
     estimator: &E,
     progress: &(dyn Fn(u64, u64) + Sync),

@@ -106,10 +106,32 @@ pub use path_render::{
     indirect_irradiance, light_pixels, render_path, render_path_with, specular_pixels, PathHalves,
 };
 pub use quadrature::{floor_points, quadrature_irradiance, unshadowed_irradiance};
-pub use run::{render, render_with, RenderStats};
+pub use run::{render, render_checked, render_with, RenderStats};
 
 use crate::error::{Error, Result};
 use crate::scene::{Camera, Scene};
+
+/// Render settings that passed [`RenderConfig::check`]: what
+/// [`render_checked`] and the image loop run on, never checked again. Read
+/// the settings through `Deref`.
+#[derive(Clone, Debug)]
+pub struct CheckedRender(RenderConfig);
+
+impl std::ops::Deref for CheckedRender {
+    type Target = RenderConfig;
+    fn deref(&self) -> &RenderConfig {
+        &self.0
+    }
+}
+
+impl CheckedRender {
+    /// The same settings with another seed (a seed is never invalid).
+    pub fn with_seed(&self, seed: u64) -> Self {
+        let mut c = self.clone();
+        c.0.seed = seed;
+        c
+    }
+}
 
 /// The photon maps a render reads: the one map set of a run
 /// ([`crate::engine::Maps`]: full, indirect, primary, with build times).
@@ -254,11 +276,17 @@ impl RenderConfig {
         }
     }
 
-    /// Checks the settings, including that the image fits in memory.
+    /// Checks every setting once, including that the image fits in memory:
+    /// the form the renderer runs on ([`render_checked`]).
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] naming the first bad setting.
-    pub fn validate(&self) -> Result<()> {
+    pub fn check(&self) -> Result<CheckedRender> {
+        self.validate()?;
+        Ok(CheckedRender(self.clone()))
+    }
+
+    fn validate(&self) -> Result<()> {
         image::check_dimensions(self.width, self.height)?;
         if self.spp == 0 || self.spp > MAX_SPP {
             return Err(Error::param(

@@ -12,7 +12,7 @@ use super::film::{self, PixelEstimator, Sample};
 use super::metrics::relative_rmse_masked;
 use super::path::{PathPart, PathTracer};
 use super::run::RenderStats;
-use super::{Image, RenderConfig};
+use super::{CheckedRender, Image, RenderConfig};
 use crate::error::Result;
 use crate::raycast::{CheckedCaster, Ray, RayCaster};
 use crate::rng::{hash2, Rng};
@@ -29,8 +29,8 @@ use std::f32::consts::PI;
 ///
 /// # Errors
 /// [`crate::Error::InvalidParameter`] for bad settings,
-/// [`crate::Error::InvalidScene`] for a scene that fails
-/// [`Scene::validate`].
+/// [`crate::Error::InvalidScene`] for a caster's hit that breaks the
+/// [`RayCaster`] contract, or no camera.
 pub fn render_path<C: RayCaster>(
     prepared: &PreparedScene<C>,
     cfg: &RenderConfig,
@@ -51,18 +51,22 @@ pub fn render_path_with<C: RayCaster>(
     part: PathPart,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Image, RenderStats)> {
-    path_image(prepared.scene(), prepared.caster(), cfg, part, progress)
+    path_image(
+        prepared.scene(),
+        prepared.caster(),
+        &cfg.check()?,
+        part,
+        progress,
+    )
 }
 
 fn path_image(
     scene: &Scene,
     rt: &dyn RayCaster,
-    cfg: &RenderConfig,
+    cfg: &CheckedRender,
     part: PathPart,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Image, RenderStats)> {
-    cfg.validate()?;
-    scene.validate()?;
     let checked = CheckedCaster::new(scene, rt);
     let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
     let estimator = PathEstimator {
@@ -133,10 +137,11 @@ impl PathHalves {
         cfg: &RenderConfig,
         part: PathPart,
     ) -> Result<Self> {
-        let (a, sa) = render_path_with(prepared, cfg, part, &|_, _| {})?;
-        let mut cb = cfg.clone();
-        cb.seed = hash2(cfg.seed, 0x0B_5EED);
-        let (b, sb) = render_path_with(prepared, &cb, part, &|_, _| {})?;
+        let cfg = cfg.check()?;
+        let (scene, rt) = (prepared.scene(), prepared.caster());
+        let (a, sa) = path_image(scene, rt, &cfg, part, &|_, _| {})?;
+        let cb = cfg.with_seed(hash2(cfg.seed, 0x0B_5EED));
+        let (b, sb) = path_image(scene, rt, &cb, part, &|_, _| {})?;
         Ok(PathHalves {
             a,
             b,

@@ -10,7 +10,9 @@ use super::film::{self, PixelEstimator, Sample};
 use super::integrator::{Ctx, SampleScratch};
 use super::sampler::{dim, PixelSampler};
 use super::CAUSTIC_RADIUS_FRACTION;
-use super::{default_max_radius, ray_epsilon, Image, RenderConfig, RenderMaps, View};
+use super::{
+    default_max_radius, ray_epsilon, CheckedRender, Image, RenderConfig, RenderMaps, View,
+};
 use crate::engine::albedo::AlbedoTable;
 use crate::error::{Error, Result};
 use crate::raycast::{CheckedCaster, RayCaster};
@@ -74,14 +76,24 @@ pub fn render_with<C: RayCaster>(
     cfg: &RenderConfig,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Image, RenderStats)> {
-    render_photons(
-        prepared.scene(),
-        prepared.caster(),
-        maps,
-        cache,
-        cfg,
-        progress,
-    )
+    render_checked(prepared, maps, cache, &cfg.check()?, progress)
+}
+
+/// [`render_with`] for settings checked already ([`RenderConfig::check`]):
+/// a program that checks its settings before any work renders with them
+/// as they are.
+///
+/// # Errors
+/// As [`render`], but for the settings.
+pub fn render_checked<C: RayCaster>(
+    prepared: &PreparedScene<C>,
+    maps: Option<&RenderMaps>,
+    cache: Option<&IrradianceCache>,
+    cfg: &CheckedRender,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<(Image, RenderStats)> {
+    let (scene, rt) = (prepared.scene(), prepared.caster());
+    render_photons(scene, rt, maps, cache, cfg, progress)
 }
 
 fn check_maps(cfg: &RenderConfig, maps: Option<&RenderMaps>) -> Result<()> {
@@ -108,11 +120,9 @@ fn render_photons(
     rt: &dyn RayCaster,
     maps: Option<&RenderMaps>,
     cache: Option<&IrradianceCache>,
-    cfg: &RenderConfig,
+    cfg: &CheckedRender,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Image, RenderStats)> {
-    cfg.validate()?;
-    scene.validate()?;
     check_maps(cfg, maps)?;
     let checked = CheckedCaster::new(scene, rt);
     let rt: &dyn RayCaster = &checked;

@@ -18,12 +18,17 @@ pub struct PreparedScene<C> {
 }
 
 impl<C: RayCaster> PreparedScene<C> {
-    /// Puts a scene and a caster built from it together.
+    /// Puts a scene and a caster built from it together. This is where a
+    /// scene is checked ([`Scene::validate`]) for tracing and rendering: a
+    /// prepared scene cannot change, so the tracer and the renderer trust it.
     ///
     /// # Errors
-    /// What [`RayCaster::check_scene`] reports (with Embree: a geometry or
-    /// material count that does not match the scene's meshes).
+    /// What [`Scene::validate`] reports (no light, no triangle, lights too
+    /// bright together), and what [`RayCaster::check_scene`] reports (with
+    /// Embree: a geometry or material count that does not match the scene's
+    /// meshes).
     pub fn new(scene: Scene, caster: C) -> Result<Self> {
+        scene.validate()?;
         caster.check_scene(&scene)?;
         Ok(PreparedScene { scene, caster })
     }

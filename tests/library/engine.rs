@@ -379,10 +379,11 @@ fn scene_without_light_is_an_error() {
     scene.clear_lights();
     let device = Device::new().unwrap();
     let rt = scene.embree_geometry(&device).unwrap();
-    let e = Tracer::new(PreparedScene::new(scene.clone(), &rt).unwrap())
-        .trace(&cfg(Mode::Classic, 100, 1))
-        .unwrap_err();
+    // Refused when prepared: the tracer and the renderer trust a prepared scene.
+    let e = PreparedScene::new(scene.clone(), &rt).unwrap_err();
     assert!(matches!(e, Error::InvalidScene(_)), "{e}");
+    let e = scene.commit(&device).unwrap_err();
+    assert!(e.to_string().contains("no light"), "{e}");
 }
 
 #[test]

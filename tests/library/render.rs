@@ -377,7 +377,7 @@ fn bad_sizes_and_paths_are_clear_errors_without_partial_files() {
     cfg.view = View::Full;
     assert!(render(&prepared, None, &cfg).is_err());
     cfg.spp = 0;
-    assert!(cfg.validate().is_err());
+    assert!(cfg.check().is_err());
 
     let img = Image::new(3, 2).unwrap();
     let dir = tempfile::tempdir().unwrap();

@@ -284,7 +284,7 @@ fn cache_is_unbiased_on_a_uniform_density() {
 
 #[test]
 fn bad_values_of_the_new_options_are_clear_errors() {
-    let check = |cfg: RenderConfig, word: &str| match cfg.validate() {
+    let check = |cfg: RenderConfig, word: &str| match cfg.check() {
         Err(Error::InvalidParameter { name, reason }) => {
             assert!(name.contains(word), "{name}: {reason}");
         }

@@ -66,7 +66,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
     let pool = args.threads.pool()?;
     let mut render = RenderConfig::new(args.size, args.size);
     render.light_samples = args.light_samples;
-    render.validate()?;
+    render.check()?;
     let cfg = StudyConfig {
         size: args.size,
         reference_spp: args.reference_spp,

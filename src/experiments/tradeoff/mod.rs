@@ -147,7 +147,7 @@ impl TradeoffConfig {
         if self.reference_spp == 0 {
             return Err(Error::param("reference spp", "must be at least 1"));
         }
-        self.render_config(self.spp, 1).validate()
+        self.render_config(self.spp, 1).check().map(drop)
     }
 
     /// A render of this study's size: emitters hidden.
@@ -242,7 +242,6 @@ pub fn run_tradeoff(
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<TradeoffResults> {
     cfg.validate()?;
-    scene.validate()?;
     let start = std::time::Instant::now();
     let device = crate::embree::Device::pinned_or_default(cfg.embree_isa)?;
     let prepared = Arc::new(scene.clone().commit(&device)?);
