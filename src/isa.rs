@@ -19,7 +19,7 @@ use std::str::FromStr;
 use crate::{Error, Result};
 
 /// The environment variable that pins the kernel set of every
-/// [`Device::new`](crate::embree::Device::new) (and so of the command line,
+/// `embree::Device::new` (and so of the command line,
 /// when `--embree-isa` is not given), as `RAYON_NUM_THREADS` sets rayon's
 /// threads.
 pub const ISA_ENV: &str = "ADAPTIVE_PM_EMBREE_ISA";

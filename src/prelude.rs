@@ -4,7 +4,7 @@
 //! emission), the photon map ([`PhotonMap`], [`PhotonRecord`], [`Neighbor`]),
 //! the tracer and its configuration, the ray-casting trait, the renderer's
 //! entry points, errors, and with the `embree` feature the Embree device and
-//! the prepared-scene type a stored tracer holds ([`EmbreeScene`]:
+//! the prepared-scene type a stored tracer holds (`EmbreeScene`:
 //! `Tracer<CommittedScene>` traces one).
 
 pub use crate::brdf::{Brdf, CookTorrance, Lambert, Mirror, Phong};

@@ -1,7 +1,7 @@
 //! Ray casting as the photon engine sees it: a [`Ray`], the [`Hit`] it
 //! returns, and the [`RayCaster`] trait the tracer is generic over.
 //!
-//! Embree's scene ([`crate::embree::CommittedScene`]) implements the trait;
+//! Embree's scene (`embree::CommittedScene`, feature `embree`) implements the trait;
 //! a renderer with its own BVH implements it too and drives the same engine
 //! (see `examples/downstream`). Nothing here depends on Embree, so this
 //! module, the scene model and the engine's shading build without it.

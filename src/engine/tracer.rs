@@ -135,7 +135,7 @@ impl<C> std::fmt::Debug for Tracer<C> {
 }
 
 impl<C: RayCaster> Tracer<C> {
-    /// A tracer for a prepared scene (from [`Scene::commit`] with Embree, or
+    /// A tracer for a prepared scene (from `Scene::commit` with Embree, or
     /// [`PreparedScene::new`] with a caster of your own); pass it by value or
     /// as an `Arc` to share it.
     pub fn new(prepared: impl Into<Arc<PreparedScene<C>>>) -> Self {

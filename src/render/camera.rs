@@ -1,7 +1,7 @@
 //! Camera rays of a pinhole camera: pixel `(x, y)` with `y` growing downwards,
 //! the vertical field of view from the camera, the aspect from the image.
 
-use crate::embree::Ray;
+use crate::raycast::Ray;
 use crate::scene::Camera;
 use glam::Vec3;
 

@@ -1,7 +1,7 @@
-//! Images in memory and on disk.
+//! Images in memory and on disk (the files with the feature `image-io`).
 //!
-//! - OpenEXR: linear RGB radiance, 32-bit float, no alpha ([`Image::write_exr`]).
-//! - PNG preview: 8-bit sRGB after a tone map ([`ToneMap`]): the radiance is
+//! - OpenEXR: linear RGB radiance, 32-bit float, no alpha (`Image::write_exr`).
+//! - PNG preview: 8-bit sRGB after a tone map ([`ToneMap`], `Image::write_png`): the radiance is
 //!   scaled by `2^exposure`, then Reinhard's `c / (1 + c)` per channel, then the
 //!   sRGB transfer curve. Documented and simple, not a film emulation.
 //! - Files are written to a temporary name in the same folder and renamed, so

@@ -7,7 +7,7 @@
 
 use super::path::{power_heuristic, PathTracer};
 use crate::brdf::Brdf;
-use crate::embree::Ray;
+use crate::raycast::Ray;
 use crate::rng::Rng;
 use crate::sampling::Frame;
 use crate::scene::Light;

@@ -1,8 +1,9 @@
 //! The scene model: triangle meshes with a material each, area lights made of
 //! emissive meshes with a `cos^n` profile, punctual lights, and an optional camera.
 //!
-//! Scenes come from glTF 2.0 files ([`Scene::load`]), from the built-in Cornell box
-//! ([`Scene::cornell`]), or are assembled in code ([`Scene::new`], [`Scene::add_mesh`]).
+//! Scenes come from glTF 2.0 files (`Scene::load`), from the built-in Cornell box
+//! (`Scene::cornell`; both with the feature `gltf`), or are assembled in code
+//! ([`Scene::new`], [`Scene::add_mesh`]).
 //! Only what the scene uses is modelled: the directionality analysis later runs on
 //! the emitters and materials found here, nothing else.
 
