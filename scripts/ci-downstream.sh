@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds and runs examples/downstream: a renderer that uses adaptive-pm as a
-# library (default features off, features = ["embree"]), with its scene built
+# library (default features off, features = ["embree", "gltf", "image-io"]), with its scene built
 # in code, a stored tracer shared by two threads, its own ray caster (a
 # trace and a render), an image written and a glTF scene loaded. Also checks
 # the API docs build without a warning for each feature set.

@@ -6,15 +6,18 @@
 //! sets how many photons each light emits and how many a hit splits into,
 //! from the energy, area and directionality of every emitter and BRDF.
 //!
-//! # A scene built in code
+//! # A scene built in code, traced and queried
 //!
-//! A grey floor under a square light that faces down (no file, no Embree):
+//! A grey floor under a square light that faces down, committed to Embree,
+//! traced, and its photon map queried. Needs the feature `embree` (the
+//! scene alone needs none):
 //!
 //! ```
+//! # #[cfg(feature = "embree")] {
+//! use adaptive_pm::embree::thread_pool;
 //! use adaptive_pm::prelude::*;
-//! use glam::Vec3;
+//! use adaptive_pm::glam::Vec3; // the glam this crate uses, re-exported
 //!
-//! # fn floor_and_light() -> adaptive_pm::Result<Scene> {
 //! let mut scene = Scene::new();
 //! let grey = scene.add_material(Material {
 //!     name: "grey".into(),
@@ -34,43 +37,11 @@
 //! scene.add_mesh("floor", quad(0.0, 1.0), vec![[0, 2, 1], [0, 3, 2]], grey)?;
 //! // down for the lamp (an emissive mesh becomes an area light).
 //! scene.add_mesh("lamp", quad(1.0, 0.25), vec![[0, 1, 2], [0, 2, 3]], lamp)?;
-//! scene.validate()?;
 //! assert_eq!((scene.triangle_count(), scene.lights().len()), (4, 1));
-//! # Ok(scene)
-//! # }
-//! # floor_and_light()?;
-//! # Ok::<(), adaptive_pm::Error>(())
-//! ```
 //!
-//! # The trace, the photon map and the irradiance estimate
-//!
-//! With the `embree` feature: commit the scene (the scene and its Embree
-//! geometry, owned together), trace, build the kd-tree, query it.
-//!
-//! ```
-//! # #[cfg(feature = "embree")] {
-//! # use adaptive_pm::prelude::*;
-//! # use glam::Vec3;
-//! # fn floor_and_light() -> adaptive_pm::Result<Scene> {
-//! #     let mut scene = Scene::new();
-//! #     let grey = scene.add_material(Material { name: "grey".into(),
-//! #         brdf: Brdf::Lambert(Lambert { albedo: Vec3::splat(0.5) }), emission: None });
-//! #     let lamp = scene.add_material(Material { name: "lamp".into(),
-//! #         brdf: Brdf::Lambert(Lambert { albedo: Vec3::ZERO }),
-//! #         emission: Some(Emission::new(Vec3::splat(10.0), CosN::new(0.0)?)) });
-//! #     let quad = |y: f32, s: f32| vec![Vec3::new(-s, y, -s), Vec3::new(s, y, -s),
-//! #         Vec3::new(s, y, s), Vec3::new(-s, y, s)];
-//! #     scene.add_mesh("floor", quad(0.0, 1.0), vec![[0, 2, 1], [0, 3, 2]], grey)?;
-//! #     scene.add_mesh("lamp", quad(1.0, 0.25), vec![[0, 1, 2], [0, 2, 3]], lamp)?;
-//! #     Ok(scene)
-//! # }
-//! use adaptive_pm::embree::thread_pool;
-//! use adaptive_pm::render::{irradiance_estimate, Lookup};
-//!
-//! let scene = floor_and_light()?; // as above
-//! let device = Device::new()?;
-//! // 'static, Send + Sync: store it, share it between threads.
-//! let tracer = Tracer::new(scene.commit(&device)?);
+//! // The scene and its Embree geometry, owned together and checked once:
+//! // 'static, Send + Sync, so a renderer can store the tracer and share it.
+//! let tracer: Tracer<CommittedScene> = Tracer::new(scene.commit(&Device::new()?)?);
 //! let pool = thread_pool(2)?; // rayon workers with FTZ/DAZ set for Embree
 //! let run = pool.install(|| tracer.trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(5_000))))?;
 //! assert_eq!(run.report.emitted, 5_000);
@@ -91,6 +62,11 @@
 //! # }
 //! # Ok::<(), adaptive_pm::Error>(())
 //! ```
+//!
+//! An image of it: [`render::render`] over the same prepared scene
+//! (`render(tracer.prepared(), Some(&maps), &cfg)`), whose module page has
+//! the example; it reads rays through any [`raycast::RayCaster`], so it
+//! needs no feature with a caster of your own.
 //!
 //! # A photon map from your own photons
 //!
@@ -121,25 +97,31 @@
 //! Modules: [`scene`] (model, glTF, lights), [`brdf`] and [`emitter`] (one
 //! file per model), [`analysis`] (directionality), [`engine`] (the wavefront
 //! tracer in its three modes), [`raycast`] (the ray-casting trait the tracer
-//! is generic over), [`photon_map`] (compact photon, kd-tree, density),
-//! `render` (images from the map) and `embree` (the safe Embree layer) with
-//! the `embree` feature. Common imports: [`prelude`]. Errors: [`Error`].
+//! and the renderer are generic over), [`photon_map`] (compact photon,
+//! kd-tree, density), [`render`] (images from the map, and the path tracer),
+//! and `embree` (the safe Embree layer) with the `embree` feature. Common
+//! imports: [`prelude`]. Errors: [`Error`]. The crate re-exports the [`glam`]
+//! and [`rayon`] it is built with, so your vectors and thread pools are its
+//! own types whatever versions your crate depends on.
 //!
 //! # Features
 //!
 //! | feature | default | what it brings |
 //! |---|---|---|
-//! | `embree` | yes | `embree` (the Intel Embree ray caster, through `adaptive-pm-embree-sys`), `Scene::commit`, `render` |
+//! | `embree` | yes | `embree` (the Intel Embree ray caster, through `adaptive-pm-embree-sys`), `Scene::commit`, photon files |
 //! | `gltf` | yes | `Scene::load` of glTF 2.0 files and the built-in Cornell box (textures are ignored) |
 //! | `image-io` | yes | OpenEXR and PNG image files (`render::Image::write_exr`, `write_png`) |
 //! | `experiments` | with `cli` | the paper's experiments and their plots (`experiments`, for the command line: not a stable API) |
 //! | `cli` | yes | the `adaptive-pm` binary |
 //!
 //! [`photon_map`], [`brdf`], [`emitter`], [`analysis`], [`scene`] (built in
-//! code), [`engine`] (over a [`raycast::RayCaster`] of your own), [`sampling`]
-//! and [`rng`] build with no feature at all: no Embree, no libclang. A renderer that brings its own scenes and images depends on
+//! code), [`engine`] and [`render`] (over a [`raycast::RayCaster`] of your
+//! own), [`sampling`] and [`rng`] build with no feature at all: no Embree,
+//! no libclang (16 crates). A renderer that traces with Embree and brings its
+//! own scenes and image files depends on
 //! `adaptive-pm = { version = "0.1", default-features = false, features = ["embree"] }`
-//! (40 crates, `scripts/count-deps.sh`).
+//! (40 crates); one that also loads glTF and writes OpenEXR adds
+//! `"gltf", "image-io"` (78 crates; `scripts/count-deps.sh` prints them).
 #![warn(missing_docs, missing_debug_implementations)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 // `unsafe` lives in `embree-sys` and the one safe wrapper module below.
@@ -148,6 +130,7 @@
 pub mod analysis;
 pub mod brdf;
 #[cfg(feature = "embree")]
+#[cfg_attr(docsrs, doc(cfg(feature = "embree")))]
 #[allow(unsafe_code)]
 pub mod embree;
 pub mod emitter;
@@ -161,6 +144,7 @@ pub mod isa;
 pub mod experiments;
 pub mod output;
 #[cfg(feature = "embree")]
+#[cfg_attr(docsrs, doc(cfg(feature = "embree")))]
 pub mod photon_file;
 pub mod photon_map;
 pub mod prelude;
@@ -171,3 +155,7 @@ pub mod sampling;
 pub mod scene;
 
 pub use error::{Error, Result};
+// The versions this crate is built with: a user's `Vec3` and thread pool
+// are these, whatever glam or rayon their own crate names.
+pub use glam;
+pub use rayon;

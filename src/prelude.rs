@@ -19,4 +19,5 @@ pub use crate::render::{
 pub use crate::scene::{Camera, Emission, Light, Material, PreparedScene, Scene};
 
 #[cfg(feature = "embree")]
+#[cfg_attr(docsrs, doc(cfg(feature = "embree")))]
 pub use crate::embree::{CommittedScene, Device, EmbreeScene};

@@ -59,6 +59,7 @@ impl RayCaster for CommittedScene {
     }
 }
 
+#[cfg_attr(docsrs, doc(cfg(feature = "embree")))]
 impl Scene {
     /// Hands the geometry to Embree and keeps the scene with it: the result
     /// is `'static`, `Send + Sync`, and what a [`crate::engine::Tracer`]
@@ -66,7 +67,8 @@ impl Scene {
     /// `geom_id` the mesh index.
     ///
     /// # Errors
-    /// [`Error::Embree`] when Embree rejects the geometry.
+    /// [`Error::Embree`] when Embree rejects the geometry; what
+    /// [`PreparedScene::new`] refuses (no light, no triangle).
     pub fn commit(self, device: &Device) -> Result<EmbreeScene> {
         let rt = self.embree_geometry(device)?;
         PreparedScene::new(self, rt)

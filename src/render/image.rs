@@ -164,6 +164,7 @@ pub fn tile_rows(t: Shard, height: u32) -> (u32, u32) {
 
 /// Image files: the `image-io` feature.
 #[cfg(feature = "image-io")]
+#[cfg_attr(docsrs, doc(cfg(feature = "image-io")))]
 impl Image {
     /// Writes linear RGB as a 32-bit float OpenEXR file (temporary name, then rename).
     ///
@@ -256,6 +257,7 @@ impl Image {
 /// long enough for the blocks of pixels its header announces: a 1 KB file
 /// may claim 30000 x 30000 pixels, which the decoder would allocate.
 #[cfg(feature = "image-io")]
+#[cfg_attr(docsrs, doc(cfg(feature = "image-io")))]
 pub struct ExrFile {
     reader: exr::block::reader::Reader<std::io::BufReader<std::fs::File>>,
     path: std::path::PathBuf,
