@@ -76,7 +76,12 @@ pub const PAPER_N_MAX: u64 = 100_000;
 pub enum Budget {
     /// Q in [0, 1]; `N_MAX = Q^2 * INT_MAX`.
     Quality(f64),
-    /// `N_MAX` directly (the paper's experiments use 100 000).
+    /// `N_MAX` directly (the paper's experiments use 100 000). A target,
+    /// not a cap on what is emitted: classic mode rounds each light's share
+    /// of it and gives every light at least one photon (a few photons off
+    /// `N_MAX` with several lights), adaptive mode gives each light up to
+    /// `N_MAX` (more than `N_MAX` in all with several bright lights).
+    /// `TraceReport::emitted` is the count.
     NMax(u64),
 }
 

@@ -301,7 +301,9 @@ impl Scene {
     /// Loads a `.gltf` or `.glb` file.
     ///
     /// # Errors
-    /// [`Error::Load`] for a missing, truncated or malformed file;
+    /// [`Error::Io`] (with the path) for a file that cannot be read: missing,
+    /// unreadable, not a regular file, or over 2 GiB; [`Error::Load`] for a
+    /// truncated or malformed one;
     /// [`Error::InvalidScene`] for NaN or infinite positions, a scene without
     /// any light, or an unsupported primitive; [`Error::InvalidParameter`] for a
     /// negative or NaN `cos^n` exponent.
