@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Prints the README's sweep tables (markdown) from `bench cornell` output
+"""Prints the sweep tables of docs/reproduction.md (markdown) from `bench cornell` output
 folders, so no figure in them is typed by hand.
 
     python3 tools/cornell_readme.py time DIR ...   # the time table

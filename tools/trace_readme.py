@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Prints a README table (markdown) from `adaptive-pm trace ... --json`
+"""Prints a table of docs/performance.md (markdown) from `adaptive-pm trace ... --json`
 outputs, one row per file, so no figure in it is typed by hand.
 
     python3 tools/trace_readme.py FILE.json ...

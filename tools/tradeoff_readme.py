@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Prints the README's trade section (markdown) from `bench tradeoff --json`
+"""Prints the trade section of docs/rendering.md (markdown) from `bench tradeoff --json`
 outputs, so no figure in it is typed by hand.
 
     python3 tools/tradeoff_readme.py "NAME@@COMMAND@@DIR/tradeoff.json" ... > section.md
