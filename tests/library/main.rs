@@ -30,7 +30,6 @@ mod kdtree;
 mod kdtree_memory;
 mod path_tracer;
 mod photon_density;
-mod photon_grid;
 mod raycast;
 mod render;
 mod render_cache;
