@@ -2,9 +2,8 @@
 //! the engine, its counts, its maps' density statistics and timings.
 
 use super::common::{open_scene, progress_bar, BudgetArgs, EmbreeArgs, ThreadArgs};
-use adaptive_pm::engine::measure::{DENSITY_K, DENSITY_POINTS, DENSITY_POINTS_SEED};
+use adaptive_pm::engine::{density_points, map_density, primary_density};
 use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
-use adaptive_pm::photon_map::density_stats_where;
 use serde_json::json;
 
 /// Arguments of `trace`.
@@ -50,12 +49,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         })
     })?;
     bar.finish_and_clear();
-    let points: Vec<glam::Vec3> = scene
-        .surface_sampler()
-        .points(DENSITY_POINTS, DENSITY_POINTS_SEED)
-        .iter()
-        .map(|p| p.position)
-        .collect();
+    let points = density_points(scene);
     // One map, built in place over the traced photons: the primary
     // statistics count only its depth-0 photons (the same k nearest as a
     // map of them alone), so the peak memory is the map itself.
@@ -64,8 +58,8 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         let t = std::time::Instant::now();
         let map = out.into_map();
         let build_s = t.elapsed().as_secs_f64();
-        let full = density_stats_where(&map, &points, DENSITY_K, |_| true);
-        let primary = density_stats_where(&map, &points, DENSITY_K, |p| p.depth() == 0);
+        let full = map_density(&map, &points);
+        let primary = primary_density(&map, &points);
         (map, build_s, full, primary)
     });
     let checksum =
