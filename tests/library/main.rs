@@ -10,7 +10,6 @@ mod common;
 mod analysis_btdf;
 mod analysis_directionality;
 mod analysis_monotone;
-mod analysis_report;
 mod bench_cornell;
 mod big_run;
 mod brdf_models;
