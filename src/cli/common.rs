@@ -11,9 +11,11 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 
-/// The photon budget and the settings of a run.
+/// The flags that make a run's [`TraceConfig`] (its photon budget, seed,
+/// depth, split cap, memory and estimator), and the `--cosn` override of the
+/// scene it traces.
 #[derive(clap::Args, Debug, Clone)]
-pub struct BudgetArgs {
+pub struct TraceConfigArgs {
     /// Quality Q in [0, 1]: N_MAX = Q^2 * (2^31 - 1).
     #[arg(long, short = 'q', conflicts_with = "n_max")]
     pub quality: Option<f64>,
@@ -65,7 +67,13 @@ pub fn parse_estimator(s: &str) -> Result<Estimator, String> {
     s.parse().map_err(|e: adaptive_pm::Error| e.to_string())
 }
 
-impl BudgetArgs {
+/// The old name, which `cli/render.rs` still uses: that file is being
+/// rewritten on another branch, which moves it to [`TraceConfigArgs`]; this
+/// alias then goes.
+pub type BudgetArgs = TraceConfigArgs;
+
+impl TraceConfigArgs {
+    /// The [`TraceConfig`] of these flags in `mode`, checked.
     pub fn config(&self, mode: Mode) -> anyhow::Result<TraceConfig> {
         let budget = match (self.quality, self.n_max) {
             (Some(q), _) => Budget::Quality(q),
@@ -159,7 +167,7 @@ mod tests {
     #[derive(clap::Parser, Debug)]
     struct Args {
         #[command(flatten)]
-        budget: BudgetArgs,
+        settings: TraceConfigArgs,
         #[command(flatten)]
         threads: ThreadArgs,
     }
@@ -187,10 +195,10 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(200))]
 
         #[test]
-        fn budget_numbers_are_used_or_refused(v in typed()) {
+        fn trace_config_numbers_are_used_or_refused(v in typed()) {
             for flag in ["--quality", "--n-max", "--cosn", "--seed", "--max-depth", "--split-cap", "--budget-mb"] {
                 let Ok(args) = parse(flag, &v) else { continue };
-                let b = &args.budget;
+                let b = &args.settings;
                 match b.config(Mode::Adaptive) {
                     // Any seed is a seed, and --cosn is checked when the
                     // scene is opened: neither may refuse the settings.

@@ -1,7 +1,7 @@
 //! `adaptive-pm trace <SCENE> --mode M (--quality Q | --n-max N)`: one run of
 //! the engine, its counts, its maps' density statistics and timings.
 
-use super::common::{open_scene, progress_bar, BudgetArgs, EmbreeArgs, ThreadArgs};
+use super::common::{open_scene, progress_bar, EmbreeArgs, TraceConfigArgs, ThreadArgs};
 use adaptive_pm::engine::{density_points, map_density, primary_density};
 use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
 use serde_json::json;
@@ -17,7 +17,7 @@ pub struct TraceArgs {
     #[arg(long, default_value = "adaptive")]
     pub mode: Mode,
     #[command(flatten)]
-    pub budget: BudgetArgs,
+    pub settings: TraceConfigArgs,
     #[command(flatten)]
     pub threads: ThreadArgs,
     #[command(flatten)]
@@ -32,8 +32,8 @@ pub struct TraceArgs {
 pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     // Fail before any work: an --out that cannot be written, or is the scene.
     args.shard.check_out(std::path::Path::new(&args.scene))?;
-    let scene = open_scene(&args.scene, args.budget.cosn)?;
-    let mut cfg: TraceConfig = args.budget.config(args.mode)?;
+    let scene = open_scene(&args.scene, args.settings.cosn)?;
+    let mut cfg: TraceConfig = args.settings.config(args.mode)?;
     cfg.shard = args.shard.resolve()?;
     cfg.validate()?;
     let pool = args.threads.pool()?;
