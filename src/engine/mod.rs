@@ -33,4 +33,4 @@ pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig};
 pub use measure::{density_points, map_density, measure, primary_density, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};
 pub use shard::Shard;
-pub use tracer::{Progress, TraceOutput, Tracer};
+pub use tracer::{TraceOutput, TraceProgress, Tracer};

@@ -317,9 +317,9 @@ impl CornellResults {
     }
 }
 
-/// Where a sweep is, for a progress bar.
+/// Where the Cornell sweep is, for a progress bar.
 #[derive(Clone, Copy, Debug)]
-pub struct SweepProgress {
+pub struct CornellProgress {
     /// Traces finished.
     pub done: usize,
     /// Traces in the sweep.
@@ -414,7 +414,7 @@ fn run_one(
 /// engine or Embree reports.
 pub fn run_cornell(
     cfg: &CornellConfig,
-    progress: &(dyn Fn(SweepProgress) + Sync),
+    progress: &(dyn Fn(CornellProgress) + Sync),
 ) -> Result<CornellResults> {
     cfg.validate()?;
     let start = Instant::now();
@@ -468,7 +468,7 @@ pub fn run_cornell(
         }
     };
 
-    progress(SweepProgress {
+    progress(CornellProgress {
         done: 0,
         total,
         n: 0.0,
@@ -519,7 +519,7 @@ pub fn run_cornell(
                 m => cfg.trace_config(m),
             };
             out.push(run_one(&tracer, &tc, n, &points, &mesh_names, a)?);
-            progress(SweepProgress {
+            progress(CornellProgress {
                 done: done.fetch_add(1, Ordering::Relaxed) + 1,
                 total,
                 n,
@@ -571,7 +571,7 @@ pub fn run_cornell(
         }
     }
     let done = done.into_inner();
-    progress(SweepProgress {
+    progress(CornellProgress {
         done,
         total,
         n: cfg.n_values.last().copied().unwrap_or(0.0),
