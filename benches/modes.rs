@@ -11,7 +11,9 @@
 
 use adaptive_pm::embree::Device;
 use adaptive_pm::emitter::CosN;
-use adaptive_pm::engine::{density_points, measure, Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer};
+use adaptive_pm::engine::{
+    density_points, measure, Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer,
+};
 use adaptive_pm::scene::{PreparedScene, Scene};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::time::Duration;

@@ -1,7 +1,7 @@
 //! `adaptive-pm trace <SCENE> --mode M (--quality Q | --n-max N)`: one run of
 //! the engine, its counts, its maps' density statistics and timings.
 
-use super::common::{open_scene, progress_bar, EmbreeArgs, TraceConfigArgs, ThreadArgs};
+use super::common::{open_scene, progress_bar, EmbreeArgs, ThreadArgs, TraceConfigArgs};
 use adaptive_pm::engine::{density_points, map_density, primary_density};
 use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
 use serde_json::json;

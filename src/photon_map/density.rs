@@ -140,7 +140,11 @@ mod tests {
         let s = summarize(&[1.0, 3.0]);
         assert_eq!((s.max, s.mean, s.sigma, s.points), (3.0, 2.0, 1.0, 2));
         assert_eq!(s.argmax, 1);
-        assert_eq!(summarize(&[2.0, 5.0, 5.0, 1.0]).argmax, 1, "the first of a tie");
+        assert_eq!(
+            summarize(&[2.0, 5.0, 5.0, 1.0]).argmax,
+            1,
+            "the first of a tie"
+        );
         assert_eq!(s.sigma_over_mean, 0.5);
         assert_eq!(summarize(&[]), DensityStats::default());
         assert_eq!(summarize(&[0.0, 0.0]).sigma_over_mean, 0.0);

@@ -453,12 +453,20 @@ fn default_analysis_is_stable_across_seeds() {
         ("cos^100", None, 100.0),
         (
             "Phong 100",
-            Some(Phong::new(Vec3::ZERO, Vec3::splat(0.9), 100.0).unwrap().into()),
+            Some(
+                Phong::new(Vec3::ZERO, Vec3::splat(0.9), 100.0)
+                    .unwrap()
+                    .into(),
+            ),
             0.0,
         ),
         (
             "Cook-Torrance 0.3",
-            Some(CookTorrance::new(0.3, Vec3::splat(0.9), Vec3::ZERO).unwrap().into()),
+            Some(
+                CookTorrance::new(0.3, Vec3::splat(0.9), Vec3::ZERO)
+                    .unwrap()
+                    .into(),
+            ),
             0.0,
         ),
     ];
