@@ -11,7 +11,7 @@
 //! photons expected within r; kiddo's unsorted form, ours unsorted too.
 
 use adaptive_pm::embree::thread_pool;
-use adaptive_pm::photon_map::{GrowingMap, PhotonMap, PhotonRecord};
+use adaptive_pm::photon_map::PhotonMap;
 use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -128,44 +128,12 @@ fn queries_1m(c: &mut Criterion) {
     group.finish();
 }
 
-/// Density control's loop on a growing map: before each insertion, the 10 nearest
-/// photons of the new one (200k photons on the unit square, cells sized so that
-/// about 10 photons of the final map fall within one cell's radius).
-fn growing_map(c: &mut Criterion) {
-    let n = 200_000;
-    let recs: Vec<PhotonRecord> = records(n, 3)
-        .into_iter()
-        .map(|mut r| {
-            r.position.z = 0.0;
-            r
-        })
-        .collect();
-    let cell = (10.0 / (std::f32::consts::PI * n as f32)).sqrt();
-    let mut group = c.benchmark_group("growing_map_200k");
-    group.sample_size(10);
-    group.measurement_time(Duration::from_secs(4));
-    group.warm_up_time(Duration::from_millis(500));
-    group.throughput(Throughput::Elements(n as u64));
-    group.bench_function("query_10_then_insert", |b| {
-        b.iter(|| {
-            let mut map = GrowingMap::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), cell).unwrap();
-            let mut out = Vec::with_capacity(10);
-            for r in &recs {
-                map.nearest_k(r.position, 10, f32::INFINITY, &mut out);
-                map.insert(*r);
-            }
-            map.len()
-        })
-    });
-    group.finish();
-}
-
 // No plots: criterion's plotters backend needs a system font, which these
 // machines lack (it panicked after the first measurement); the numbers are
 // in the terminal and in target/criterion.
 criterion_group! {
     name = benches;
     config = Criterion::default().without_plots();
-    targets = build, queries_1m, growing_map
+    targets = build, queries_1m
 }
 criterion_main!(benches);

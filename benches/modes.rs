@@ -11,8 +11,9 @@
 
 use adaptive_pm::embree::Device;
 use adaptive_pm::emitter::CosN;
-use adaptive_pm::engine::measure::{DENSITY_POINTS, DENSITY_POINTS_SEED};
-use adaptive_pm::engine::{measure, Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer};
+use adaptive_pm::engine::{
+    density_points, measure, Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer,
+};
 use adaptive_pm::scene::{PreparedScene, Scene};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::time::Duration;
@@ -32,9 +33,7 @@ fn modes(c: &mut Criterion) {
         .collect();
     // one committed geometry serves every exponent: only the emission changes
     let rt = scenes[0].embree_geometry(&device).unwrap();
-    let points = scenes[0]
-        .surface_sampler()
-        .points(DENSITY_POINTS, DENSITY_POINTS_SEED);
+    let points = density_points(&scenes[0]);
 
     let classic = TraceConfig::new(Mode::Classic, Budget::NMax(N_MAX));
     let reference = Tracer::new(PreparedScene::new(scenes[0].clone(), &rt).unwrap())

@@ -113,10 +113,28 @@ pub fn uniform_triangle(u: [f32; 2]) -> (f32, f32) {
     (1.0 - su, u[1] * su)
 }
 
+/// Rec. 709 luminance weights of linear RGB: the one copy, for
+/// [`luminance`] and [`luminance_f64`].
+pub const LUMINANCE_WEIGHTS: [f64; 3] = [0.2126, 0.7152, 0.0722];
+
 /// Rec. 709 luminance of linear RGB.
 #[inline]
 pub fn luminance(rgb: Vec3) -> f32 {
-    0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z
+    // Each weight rounded to f32 is the f32 nearest its decimal: the same
+    // constants as written in f32.
+    const W: [f32; 3] = [
+        LUMINANCE_WEIGHTS[0] as f32,
+        LUMINANCE_WEIGHTS[1] as f32,
+        LUMINANCE_WEIGHTS[2] as f32,
+    ];
+    W[0] * rgb.x + W[1] * rgb.y + W[2] * rgb.z
+}
+
+/// [`luminance`] in f64, for sums of power kept in f64.
+#[inline]
+pub fn luminance_f64(rgb: [f64; 3]) -> f64 {
+    let w = LUMINANCE_WEIGHTS;
+    w[0] * rgb[0] + w[1] * rgb[1] + w[2] * rgb[2]
 }
 
 /// Perfect mirror of `w` about +z in a local frame.
@@ -147,6 +165,14 @@ mod tests {
             let w = Vec3::new(0.2, 0.5, 0.3).normalize();
             assert!((f.local_from_world(f.world_from_local(w)) - w).length() < 1e-5);
         }
+    }
+
+    #[test]
+    fn luminance_weights_are_the_rec709_decimals_in_both_precisions() {
+        assert_eq!(luminance(Vec3::X), 0.2126f32);
+        assert_eq!(luminance(Vec3::Y), 0.7152f32);
+        assert_eq!(luminance(Vec3::Z), 0.0722f32);
+        assert_eq!(luminance_f64([1.0, 1.0, 1.0]), 0.2126 + 0.7152 + 0.0722);
     }
 
     #[test]

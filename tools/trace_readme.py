@@ -23,14 +23,14 @@ def main(args):
     for i, f in enumerate(args):
         try:
             d = json.load(open(f))
-            d["rays_per_s"], d["map_bytes"], d["peak_rss_bytes"], d["build_s"]
+            d["rays"], d["rays_per_s"], d["map_bytes"], d["peak_rss_bytes"], d["build_s"]
         except (OSError, ValueError, KeyError) as e:
             sys.exit(f"{f}: not the JSON of `adaptive-pm trace --json` ({e})")
         mrays = d["rays_per_s"] / 1e6
         row = [f"{d['emitted']:,}", f"{d['stored']:,}", str(d["threads"]),
                f"{d['map_bytes'] / 1e6:,.0f}", f"{d['peak_rss_bytes'] / 1e6:,.0f}",
                f"{d['peak_rss_bytes'] / d['map_bytes']:.3f}", f"{d['trace_s']:.1f}",
-               f"{d['rays_traced']:.3g}", f"{mrays:.2f}", f"{d['build_s']:.1f}"]
+               f"{d['rays']:.3g}", f"{mrays:.2f}", f"{d['build_s']:.1f}"]
         if raw:
             row.append(f"{mrays / raw[i]:.2f}")
         out.append("| " + " | ".join(row) + " |")

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 ///
 /// Sample count and grid. Before stratification (one i.i.d. set, 8 seeds,
 /// theta_in = 30° for BRDFs; mean ± sd of `alpha_D` as N and the grid
-/// doubled; `report_convergence` in `tests/library/analysis_report.rs`):
+/// doubled; measured on that analysis, which the code no longer has):
 ///
 /// | function  | N=256, 16x16 | N=512, 16x32 | N=1024, 32x32 | N=2048, 32x64 |
 /// |-----------|--------------|--------------|---------------|---------------|
@@ -21,7 +21,9 @@ use crate::error::{Error, Result};
 /// are why the default is now 24 interleaved stratified sets of 128 samples
 /// whose estimates are averaged ([`AnalysisParams::sets`]): a set of 128 is
 /// smaller than the paper's clustering would like (its values sit ~15 %
-/// below the 512-sample ones for cos^n), but the average is stable.
+/// below the 512-sample ones for cos^n), but the average is stable: over 64
+/// seeds its relative sd is 1.0-1.4 % on the first three rows' functions and
+/// 5.2 % on Cook–Torrance (`analysis_directionality::default_analysis_is_stable_across_seeds`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AnalysisParams {
     /// Variance of the normalised function (sr^-2) below which it is diffuse
@@ -47,11 +49,11 @@ pub struct AnalysisParams {
     /// `cos^n`; averaging K sets of N splits each step into K steps K times
     /// smaller at the clustering cost of K N^2 (against (K N)^2 for one set).
     /// Measured (`tests/library/analysis_monotone.rs`): with 24 x 128 the largest
-    /// step up over cos^n, n = 0..1000, is 1.7 % at the default seed and
-    /// 1.57-3.12 % over 16 seeds (mean 1.83 %); over Phong exponents 0-3.89 %
-    /// (mean 1.05 %; `cargo test --test library analysis_report::report_step_ups_over_seeds
-    /// -- --ignored --nocapture`). With 16 x 128 it was 2.5 % at the default
-    /// seed, with one set of 512, 10 % (and 48 % for Phong).
+    /// step up over cos^n, n = 0..1000, is 1.57-1.76 % over 16 seeds (mean
+    /// 1.68 %); over Phong exponents 0.34-3.53 % (mean 1.65 %; `cargo test
+    /// --test library analysis_monotone::step_ups_over_16_seeds -- --ignored
+    /// --nocapture`). With 16 x 128 it was 2.5 % at the default seed, with
+    /// one set of 512, 10 % (and 48 % for Phong).
     pub sets: usize,
     /// Strata along `cos theta` of the equal-solid-angle grid (default 16).
     pub grid_cos_theta: usize,

@@ -11,9 +11,11 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 
-/// The photon budget and the settings of a run.
+/// The flags that make a run's [`TraceConfig`] (its photon budget, seed,
+/// depth, split cap, memory and estimator), and the `--cosn` override of the
+/// scene it traces.
 #[derive(clap::Args, Debug, Clone)]
-pub struct BudgetArgs {
+pub struct TraceConfigArgs {
     /// Quality Q in [0, 1]: N_MAX = Q^2 * (2^31 - 1).
     #[arg(long, short = 'q', conflicts_with = "n_max")]
     pub quality: Option<f64>,
@@ -32,8 +34,7 @@ pub struct BudgetArgs {
     /// Per-hit cap on children (adaptive mode).
     #[arg(long, default_value_t = DEFAULT_SPLIT_CAP)]
     pub split_cap: u32,
-    /// Memory for photons in MiB (default: half the available memory).
-    #[arg(long)]
+    #[arg(long, help = budget_help())]
     pub budget_mb: Option<u64>,
     /// Directionality estimator: paper (the paper's clustering) or peak (peak density).
     #[arg(long, default_value = "paper", value_parser = parse_estimator)]
@@ -61,16 +62,29 @@ pub fn parse_exposure(s: &str) -> Result<f32, String> {
     }
 }
 
+/// `--budget-mb`'s help, from the default the engine uses.
+fn budget_help() -> String {
+    use adaptive_pm::engine::config::{
+        available_memory, default_memory_budget, DEFAULT_MEMORY_SHARE,
+    };
+    let (num, den) = DEFAULT_MEMORY_SHARE;
+    format!(
+        "Memory for photons in MiB (default: {num}/{den} of the available memory, now {} MiB)",
+        default_memory_budget(available_memory()) >> 20
+    )
+}
+
 pub fn parse_estimator(s: &str) -> Result<Estimator, String> {
     s.parse().map_err(|e: adaptive_pm::Error| e.to_string())
 }
 
-impl BudgetArgs {
+impl TraceConfigArgs {
+    /// The [`TraceConfig`] of these flags in `mode`, checked.
     pub fn config(&self, mode: Mode) -> anyhow::Result<TraceConfig> {
         let budget = match (self.quality, self.n_max) {
             (Some(q), _) => Budget::Quality(q),
             (None, Some(n)) => Budget::NMax(n),
-            (None, None) => Budget::NMax(100_000),
+            (None, None) => Budget::default(),
         };
         let mut cfg = TraceConfig::new(mode, budget);
         cfg.seed = self.seed;
@@ -159,7 +173,7 @@ mod tests {
     #[derive(clap::Parser, Debug)]
     struct Args {
         #[command(flatten)]
-        budget: BudgetArgs,
+        settings: TraceConfigArgs,
         #[command(flatten)]
         threads: ThreadArgs,
     }
@@ -187,12 +201,14 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(200))]
 
         #[test]
-        fn budget_numbers_are_used_or_refused(v in typed()) {
+        fn trace_config_numbers_are_used_or_refused(v in typed()) {
             for flag in ["--quality", "--n-max", "--cosn", "--seed", "--max-depth", "--split-cap", "--budget-mb"] {
                 let Ok(args) = parse(flag, &v) else { continue };
-                let b = &args.budget;
+                let b = &args.settings;
                 match b.config(Mode::Adaptive) {
-                    Err(e) => prop_assert!(!e.to_string().is_empty()),
+                    // Any seed is a seed, and --cosn is checked when the
+                    // scene is opened: neither may refuse the settings.
+                    Err(e) => prop_assert!(!matches!(flag, "--seed" | "--cosn"), "{flag} {v}: {e}"),
                     Ok(cfg) => match flag {
                         "--quality" => {
                             let q = b.quality.unwrap();
@@ -207,12 +223,8 @@ mod tests {
                             cfg.memory_budget,
                             b.budget_mb.map(|m| m * (1 << 20))
                         ),
-                        // --cosn is checked by CosN::new when the scene is opened.
-                        _ => {
-                            let n = b.cosn.unwrap();
-                            prop_assert!(n.is_finite());
-                            let _ = CosN::new(n);
-                        }
+                        // parse_finite let no NaN or infinity through.
+                        _ => prop_assert!(b.cosn.is_some_and(f32::is_finite)),
                     },
                 }
             }

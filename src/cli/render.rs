@@ -1,7 +1,7 @@
 //! `adaptive-pm render <SCENE> --mode M (--quality Q | --n-max N) --out image.exr`:
 //! trace photons, build the maps, render an image (see `adaptive_pm::render`).
 
-use super::common::{open_scene, progress_bar, BudgetArgs, EmbreeArgs, ThreadArgs};
+use super::common::{open_scene, progress_bar, EmbreeArgs, ThreadArgs, TraceConfigArgs};
 use adaptive_pm::embree::EmbreeScene;
 use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
 use adaptive_pm::output::refuse_overwrite;
@@ -30,7 +30,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "photon")]
     pub integrator: Integrator,
     #[command(flatten)]
-    pub budget: BudgetArgs,
+    pub budget: TraceConfigArgs,
     #[command(flatten)]
     pub threads: ThreadArgs,
     #[command(flatten)]

@@ -1,10 +1,9 @@
 //! `adaptive-pm trace <SCENE> --mode M (--quality Q | --n-max N)`: one run of
 //! the engine, its counts, its maps' density statistics and timings.
 
-use super::common::{open_scene, progress_bar, BudgetArgs, EmbreeArgs, ThreadArgs};
-use adaptive_pm::engine::measure::{DENSITY_K, DENSITY_POINTS, DENSITY_POINTS_SEED};
+use super::common::{open_scene, progress_bar, EmbreeArgs, ThreadArgs, TraceConfigArgs};
+use adaptive_pm::engine::{density_points, map_density, primary_density};
 use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
-use adaptive_pm::photon_map::density_stats_where;
 use serde_json::json;
 
 /// Arguments of `trace`.
@@ -18,7 +17,7 @@ pub struct TraceArgs {
     #[arg(long, default_value = "adaptive")]
     pub mode: Mode,
     #[command(flatten)]
-    pub budget: BudgetArgs,
+    pub settings: TraceConfigArgs,
     #[command(flatten)]
     pub threads: ThreadArgs,
     #[command(flatten)]
@@ -33,8 +32,8 @@ pub struct TraceArgs {
 pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     // Fail before any work: an --out that cannot be written, or is the scene.
     args.shard.check_out(std::path::Path::new(&args.scene))?;
-    let scene = open_scene(&args.scene, args.budget.cosn)?;
-    let mut cfg: TraceConfig = args.budget.config(args.mode)?;
+    let scene = open_scene(&args.scene, args.settings.cosn)?;
+    let mut cfg: TraceConfig = args.settings.config(args.mode)?;
     cfg.shard = args.shard.resolve()?;
     cfg.validate()?;
     let pool = args.threads.pool()?;
@@ -50,12 +49,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         })
     })?;
     bar.finish_and_clear();
-    let points: Vec<glam::Vec3> = scene
-        .surface_sampler()
-        .points(DENSITY_POINTS, DENSITY_POINTS_SEED)
-        .iter()
-        .map(|p| p.position)
-        .collect();
+    let points = density_points(scene);
     // One map, built in place over the traced photons: the primary
     // statistics count only its depth-0 photons (the same k nearest as a
     // map of them alone), so the peak memory is the map itself.
@@ -64,8 +58,8 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         let t = std::time::Instant::now();
         let map = out.into_map();
         let build_s = t.elapsed().as_secs_f64();
-        let full = density_stats_where(&map, &points, DENSITY_K, |_| true);
-        let primary = density_stats_where(&map, &points, DENSITY_K, |p| p.depth() == 0);
+        let full = map_density(&map, &points);
+        let primary = primary_density(&map, &points);
         (map, build_s, full, primary)
     });
     let checksum =
@@ -97,9 +91,7 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
         "sigma_over_mean_primary": primary.sigma_over_mean,
         "trace_s": r.trace_s,
         "rays": r.rays,
-        "rays_traced": r.rays,
         "rays_per_s": r.rays_per_s,
-        "mrays_per_s": r.mrays_per_s,
         "peak_rss_bytes": peak_rss_bytes,
         "map_bytes": map.memory_bytes(),
         "trace_primary_s": r.trace_primary_s,

@@ -288,11 +288,17 @@ impl CheckedConfig {
     }
 }
 
-/// The memory budget when none is given: 7/8 of the available memory. A
-/// stored photon costs 16 bytes and nothing else holds photons (the kd-tree
-/// is built in place), so 1e9 photons (16 GB) fit on a 24 GB machine.
+/// The share of the available memory the budget takes when none is given,
+/// as `(numerator, denominator)`: 7/8.
+pub const DEFAULT_MEMORY_SHARE: (u64, u64) = (7, 8);
+
+/// The memory budget when none is given: [`DEFAULT_MEMORY_SHARE`] of the
+/// available memory. A stored photon costs 16 bytes and nothing else holds
+/// photons (the kd-tree is built in place), so 1e9 photons (16 GB) fit on a
+/// 24 GB machine.
 pub fn default_memory_budget(available: u64) -> u64 {
-    available / 8 * 7
+    let (num, den) = DEFAULT_MEMORY_SHARE;
+    available / den * num
 }
 
 /// Bytes of available memory (Linux `MemAvailable`), or 4 GiB when unknown.

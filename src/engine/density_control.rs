@@ -27,9 +27,9 @@
 //!
 //! The structure is a hashed grid of cubic cells of side `2 r_t`, each cell's
 //! photons contiguous (position, direction, index), so a query reads the 8
-//! cells that hold the ball of radius `r_t` around the photon and nothing else. It is a specialised cousin of
-//! [`crate::photon_map::GrowingMap`], which answers general k-nearest queries:
-//! this test runs once per photon hit and is the method's whole cost.
+//! cells that hold the ball of radius `r_t` around the photon and nothing else:
+//! this test runs once per photon hit and is the method's whole cost, so it
+//! answers only this one fixed-radius question, not general k-nearest queries.
 //!
 //! Photons are offered in the wave's deterministic order, so the result does
 //! not depend on the thread count. This pass is sequential.

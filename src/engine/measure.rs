@@ -4,14 +4,13 @@
 //! density `k / (pi r_k^2)` over fixed surface points.
 
 use crate::photon_map::{
-    density_stats, CompactPhoton, DensityStats, PhotonMap, PhotonRecord, Quantizer,
+    density_stats, density_stats_where, CompactPhoton, DensityStats, PhotonMap, PhotonRecord,
+    Quantizer, DEFAULT_DENSITY_K,
 };
-use crate::scene::SurfacePoint;
+use crate::scene::{Scene, SurfacePoint};
+use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
-
-/// k of the density estimate `k / (pi r_k^2)`.
-pub const DENSITY_K: usize = 50;
 
 /// Evaluation points of the density statistics: enough that the max is
 /// stable (the same points for every mode and run: docs/method.md, "Density
@@ -161,16 +160,36 @@ pub struct MapMetrics {
 
 /// Evaluates the density of both maps at `points`.
 pub fn measure(maps: &Maps, points: &[SurfacePoint]) -> MapMetrics {
-    // A zero normal counts photons from both sides: points are where the
-    // density is measured, whichever side of a surface the light reached.
-    let pts: Vec<(glam::Vec3, glam::Vec3)> = points
-        .iter()
-        .map(|p| (p.position, glam::Vec3::ZERO))
-        .collect();
     MapMetrics {
-        full: density_stats(&maps.full, &pts, DENSITY_K),
-        primary: density_stats(&maps.primary, &pts, DENSITY_K),
+        full: map_density(&maps.full, points),
+        primary: map_density(&maps.primary, points),
         bytes_per_photon: maps.full.bytes_per_photon() as f64,
         checksum: maps.full.checksum(),
     }
+}
+
+/// The density evaluation points of `scene`: [`DENSITY_POINTS`] of them,
+/// area-uniform, from [`DENSITY_POINTS_SEED`].
+pub fn density_points(scene: &Scene) -> Vec<SurfacePoint> {
+    scene
+        .surface_sampler()
+        .points(DENSITY_POINTS, DENSITY_POINTS_SEED)
+}
+
+/// The density statistics of `map` at `points`, over the
+/// [`DEFAULT_DENSITY_K`] nearest photons. Photons of both sides count:
+/// points are where the density is measured, whichever side of a surface
+/// the light reached.
+pub fn map_density(map: &PhotonMap, points: &[SurfacePoint]) -> DensityStats {
+    let pts: Vec<(Vec3, Vec3)> = points.iter().map(|p| (p.position, Vec3::ZERO)).collect();
+    density_stats(map, &pts, DEFAULT_DENSITY_K)
+}
+
+/// [`map_density`] of the primary photons (depth 0) of `full`, without
+/// building their map: the values a primary map gives whose positions are
+/// quantised as `full`'s are ([`Maps::from_photons`] builds it so), for the
+/// peak memory of one map.
+pub fn primary_density(full: &PhotonMap, points: &[SurfacePoint]) -> DensityStats {
+    let pts: Vec<Vec3> = points.iter().map(|p| p.position).collect();
+    density_stats_where(full, &pts, DEFAULT_DENSITY_K, |p| p.depth() == 0)
 }

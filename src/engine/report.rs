@@ -127,7 +127,7 @@ impl TraceReport {
             }
             let d = self.depth_mut(depth);
             d.stored = n;
-            d.stored_power_luminance = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+            d.stored_power_luminance = crate::sampling::luminance_f64(p);
         }
         self.stored = by_depth.iter().map(|d| d.0).sum();
         self.stored_power = power;

@@ -72,9 +72,9 @@ fn material_tables(
 /// `Error::Budget` when the emitted photons alone would not fit.
 pub const BYTES_PER_STORED_PHOTON: u64 = std::mem::size_of::<CompactPhoton>() as u64;
 
-/// Progress of a run, for a progress bar.
+/// Where a trace is, for a progress bar.
 #[derive(Clone, Copy, Debug)]
-pub struct Progress {
+pub struct TraceProgress {
     /// Bounce depth of the wave under way (0 = photons leaving the lights).
     pub depth: u32,
     /// Photons emitted so far (waves are streamed depth by depth).
@@ -194,7 +194,7 @@ impl<C: RayCaster> Tracer<C> {
     pub fn trace_with_progress(
         &self,
         cfg: &TraceConfig,
-        progress: &(dyn Fn(Progress) + Sync),
+        progress: &(dyn Fn(TraceProgress) + Sync),
     ) -> Result<TraceOutput> {
         self.trace_checked(&cfg.check()?, progress)
     }
@@ -224,7 +224,7 @@ impl<C: RayCaster> Tracer<C> {
     pub fn trace_checked(
         &self,
         cfg: &CheckedConfig,
-        progress: &(dyn Fn(Progress) + Sync),
+        progress: &(dyn Fn(TraceProgress) + Sync),
     ) -> Result<TraceOutput> {
         // Checked once, when it was prepared.
         let scene = self.prepared.scene();
@@ -313,7 +313,7 @@ impl<C: RayCaster> Tracer<C> {
             let outs = trace_wave(&ctx, &wave, &mut photons, cfg.batch(), density.is_some());
             absorb_wave(scene, outs, depth, &mut report, &mut density, &mut schedule)?;
             report.depth_mut(depth).seconds += wave_start.elapsed().as_secs_f64();
-            progress(Progress {
+            progress(TraceProgress {
                 depth: depth as u32,
                 done: schedule.emitted_so_far(),
                 total: emitted,

@@ -31,12 +31,10 @@
 use crate::analysis::{analyze_emitter, AnalysisParams, Estimator};
 use crate::embree::{CommittedScene, Device};
 use crate::emitter::CosN;
-use crate::engine::measure::{DENSITY_K, DENSITY_POINTS, DENSITY_POINTS_SEED};
-use crate::engine::{Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer};
+use crate::engine::{density_points, map_density, Budget, DensityTarget, Maps, Mode};
+use crate::engine::{TraceConfig, Tracer};
 use crate::error::{Error, Result};
-use crate::photon_map::{density_at_facing, density_stats, DensityStats, PhotonMap};
 use crate::scene::{Light, PreparedScene, Scene, SurfacePoint};
-use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -319,9 +317,9 @@ impl CornellResults {
     }
 }
 
-/// Where a sweep is, for a progress bar.
+/// Where the Cornell sweep is, for a progress bar.
 #[derive(Clone, Copy, Debug)]
-pub struct SweepProgress {
+pub struct CornellProgress {
     /// Traces finished.
     pub done: usize,
     /// Traces in the sweep.
@@ -351,29 +349,6 @@ fn alpha_rows(n_values: &[f64], params: &AnalysisParams) -> Result<Vec<AlphaRow>
         .collect()
 }
 
-/// Density statistics of `map` at `points` (both sides of the surface, as
-/// `engine::measure`) and the index of the first point holding the max.
-fn stats_with_argmax(map: &PhotonMap, points: &[SurfacePoint]) -> (DensityStats, usize) {
-    let d: Vec<f64> = points
-        .par_iter()
-        .map_init(Vec::new, |scratch, p| {
-            density_at_facing(map, p.position, Vec3::ZERO, DENSITY_K, scratch) as f64
-        })
-        .collect();
-    let n = d.len().max(1) as f64;
-    let mean = d.iter().sum::<f64>() / n;
-    let sigma = (d.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt();
-    let arg = (0..d.len()).fold(0, |b, i| if d[i] > d[b] { i } else { b });
-    let stats = DensityStats {
-        max: d.get(arg).copied().unwrap_or(0.0),
-        mean,
-        sigma,
-        sigma_over_mean: if mean > 0.0 { sigma / mean } else { 0.0 },
-        points: d.len(),
-    };
-    (stats, arg)
-}
-
 /// One trace, its maps and their densities.
 fn run_one(
     tracer: &Tracer<&CommittedScene>,
@@ -386,17 +361,9 @@ fn run_one(
     let out = tracer.trace(cfg)?;
     let maps = Maps::from_photons(out.photons, out.frame);
     let t = Instant::now();
-    let full = density_stats(
-        &maps.full,
-        &points
-            .iter()
-            .map(|p| (p.position, Vec3::ZERO))
-            .collect::<Vec<_>>(),
-        DENSITY_K,
-    );
-    let (primary, arg) = stats_with_argmax(&maps.primary, points);
-    let m = MapStats { full, primary };
-    let at = points.get(arg);
+    let full = map_density(&maps.full, points);
+    let primary = map_density(&maps.primary, points);
+    let at = points.get(primary.argmax);
     let measure_s = t.elapsed().as_secs_f64();
     let r = out.report;
     let alpha_d = out.plans.first().map_or(1.0, |p| p.alpha_d as f64);
@@ -410,14 +377,14 @@ fn run_one(
         reemitted_first_hit: r.reemitted_first_hit,
         split_rate_by_depth: r.split_rate_by_depth,
         hits_by_depth: r.depths.iter().map(|d| d.hits).collect(),
-        max_density_primary: m.primary.max,
-        mean_density_primary: m.primary.mean,
-        sigma_density_primary: m.primary.sigma,
-        sigma_over_mean_primary: m.primary.sigma_over_mean,
-        max_density: m.full.max,
-        mean_density: m.full.mean,
-        sigma_density: m.full.sigma,
-        sigma_over_mean: m.full.sigma_over_mean,
+        max_density_primary: primary.max,
+        mean_density_primary: primary.mean,
+        sigma_density_primary: primary.sigma,
+        sigma_over_mean_primary: primary.sigma_over_mean,
+        max_density: full.max,
+        mean_density: full.mean,
+        sigma_density: full.sigma,
+        sigma_over_mean: full.sigma_over_mean,
         trace_s: r.trace_s,
         trace_primary_s: r.trace_primary_s,
         build_s: maps.build_s,
@@ -438,11 +405,6 @@ fn run_one(
     })
 }
 
-struct MapStats {
-    full: DensityStats,
-    primary: DensityStats,
-}
-
 /// Runs the sweep with as many workers as the current rayon pool has threads
 /// (wrap it in `pool.install` to choose). `progress` is called as traces
 /// finish, from the worker threads.
@@ -452,7 +414,7 @@ struct MapStats {
 /// engine or Embree reports.
 pub fn run_cornell(
     cfg: &CornellConfig,
-    progress: &(dyn Fn(SweepProgress) + Sync),
+    progress: &(dyn Fn(CornellProgress) + Sync),
 ) -> Result<CornellResults> {
     cfg.validate()?;
     let start = Instant::now();
@@ -483,9 +445,7 @@ pub fn run_cornell(
     let mesh_names: Vec<String> = scene.meshes().iter().map(|m| m.name.clone()).collect();
     let device = Device::pinned_or_default(cfg.embree_isa)?;
     let rt = scene.embree_geometry(&device)?;
-    let points = scene
-        .surface_sampler()
-        .points(DENSITY_POINTS, DENSITY_POINTS_SEED);
+    let points = density_points(&scene);
     let total = cfg.run_count();
     let mut timed = cfg.modes.clone();
     if !timed.contains(&Mode::Classic) {
@@ -508,7 +468,7 @@ pub fn run_cornell(
         }
     };
 
-    progress(SweepProgress {
+    progress(CornellProgress {
         done: 0,
         total,
         n: 0.0,
@@ -559,7 +519,7 @@ pub fn run_cornell(
                 m => cfg.trace_config(m),
             };
             out.push(run_one(&tracer, &tc, n, &points, &mesh_names, a)?);
-            progress(SweepProgress {
+            progress(CornellProgress {
                 done: done.fetch_add(1, Ordering::Relaxed) + 1,
                 total,
                 n,
@@ -611,7 +571,7 @@ pub fn run_cornell(
         }
     }
     let done = done.into_inner();
-    progress(SweepProgress {
+    progress(CornellProgress {
         done,
         total,
         n: cfg.n_values.last().copied().unwrap_or(0.0),

@@ -69,6 +69,9 @@ pub struct DensityStats {
     pub sigma_over_mean: f64,
     /// Number of evaluation points.
     pub points: usize,
+    /// Index of the first point holding the largest density (0 without points):
+    /// where the peak is, for a report to name its mesh and position.
+    pub argmax: usize,
 }
 
 /// Density statistics over `points` (position, normal; see the module docs) with `k`
@@ -107,7 +110,8 @@ where
     summarize(&densities)
 }
 
-/// Max, mean and population standard deviation (two passes, in order).
+/// Max and where it is, mean and population standard deviation (two passes,
+/// in order).
 fn summarize(values: &[f64]) -> DensityStats {
     if values.is_empty() {
         return DensityStats::default();
@@ -116,12 +120,14 @@ fn summarize(values: &[f64]) -> DensityStats {
     let mean = values.iter().sum::<f64>() / n;
     let var = values.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
     let sigma = var.sqrt();
+    let argmax = (0..values.len()).fold(0, |b, i| if values[i] > values[b] { i } else { b });
     DensityStats {
         max: values.iter().copied().fold(0.0, f64::max),
         mean,
         sigma,
         sigma_over_mean: if mean > 0.0 { sigma / mean } else { 0.0 },
         points: values.len(),
+        argmax,
     }
 }
 
@@ -133,6 +139,12 @@ mod tests {
     fn summary_of_known_values() {
         let s = summarize(&[1.0, 3.0]);
         assert_eq!((s.max, s.mean, s.sigma, s.points), (3.0, 2.0, 1.0, 2));
+        assert_eq!(s.argmax, 1);
+        assert_eq!(
+            summarize(&[2.0, 5.0, 5.0, 1.0]).argmax,
+            1,
+            "the first of a tie"
+        );
         assert_eq!(s.sigma_over_mean, 0.5);
         assert_eq!(summarize(&[]), DensityStats::default());
         assert_eq!(summarize(&[0.0, 0.0]).sigma_over_mean, 0.0);

@@ -1,13 +1,12 @@
 //! The photon map (docs/method.md, "The photon map and its measurements"):
 //! photons stored at non-specular hits, kept compact (16 bytes each,
 //! [`photon`]) in a balanced kd-tree in one flat array
-//! ([`PhotonMap`], built in [`kdtree`], queried in [`query`]), a hash grid that can be
-//! queried while it grows for density control ([`GrowingMap`], Suykens & Willems 2000)
-//! and the photon-density statistics the experiments report ([`density`]).
+//! ([`PhotonMap`], built in [`kdtree`], queried in [`query`]) and the
+//! photon-density statistics the experiments report ([`density`]).
 //!
 //! Indices: a [`Neighbor::index`] of a [`PhotonMap`] is a position in the map's own
 //! (tree) order, to be read back with [`PhotonMap::photon`]; it is not the index of the
-//! record the map was built from. A [`GrowingMap`] index is the insertion index.
+//! record the map was built from.
 //!
 //! Primary photons only: build a second map with
 //! `PhotonMap::build_filtered(&records, |r| r.depth == 0)`; caustic photons
@@ -16,7 +15,6 @@
 use glam::Vec3;
 
 pub mod density;
-pub mod grid;
 pub mod kdtree;
 pub mod photon;
 pub mod query;
@@ -26,7 +24,6 @@ pub use density::{
     density_at, density_at_facing, density_stats, density_stats_where, DensityStats,
     DEFAULT_DENSITY_K,
 };
-pub use grid::GrowingMap;
 pub use kdtree::PhotonMap;
 pub use photon::{CompactPhoton, Quantizer};
 

@@ -168,7 +168,7 @@ fn children(
 /// Inserts `n` into `heap`, a max-heap on `dist2` of at most `k` entries: pushed when
 /// the heap is not full, else it replaces the farthest (the caller checks that `n` is
 /// nearer than it).
-pub(crate) fn heap_insert(heap: &mut Vec<Neighbor>, k: usize, n: Neighbor) {
+fn heap_insert(heap: &mut Vec<Neighbor>, k: usize, n: Neighbor) {
     if heap.len() < k {
         heap.push(n);
         let mut i = heap.len() - 1;
@@ -206,7 +206,7 @@ pub(crate) fn heap_insert(heap: &mut Vec<Neighbor>, k: usize, n: Neighbor) {
 }
 
 /// Sorts a finished k-nearest result by distance, then index.
-pub(crate) fn sort_neighbors(out: &mut [Neighbor]) {
+fn sort_neighbors(out: &mut [Neighbor]) {
     // One integer key in the order of `(dist2.total_cmp, index)`: a sort of
     // plain u64s, about twice as fast as comparing floats and then indices.
     out.sort_unstable_by_key(|n| {

@@ -11,7 +11,6 @@
 //!   blur at shadow edges compared with a flat disc. Relative noise of the
 //!   estimate ~ `1 / sqrt(k)` (a little more than the flat disc's).
 
-use super::DEFAULT_K;
 use crate::brdf::Brdf;
 use crate::photon_map::{Neighbor, PhotonMap};
 use crate::sampling::Frame;
@@ -141,16 +140,6 @@ pub fn irradiance_estimate(
     scratch: &mut Vec<Neighbor>,
 ) -> Estimate {
     kernel_sum(map, x, n, lookup, scratch, |_, power| power)
-}
-
-/// [`irradiance_estimate`] with [`DEFAULT_K`] neighbours and no radius bound.
-pub fn irradiance_default(map: &PhotonMap, x: Vec3, n: Vec3) -> Vec3 {
-    let mut scratch = Vec::with_capacity(DEFAULT_K);
-    let lookup = Lookup {
-        k: DEFAULT_K,
-        max_radius: f32::INFINITY,
-    };
-    irradiance_estimate(map, x, n, lookup, &mut scratch).value
 }
 
 #[cfg(test)]

@@ -1,9 +1,10 @@
 //! Image errors against a reference.
 //!
 //! - [`rmse`]: `sqrt(mean over pixels and channels of (a - b)^2)`.
-//! - [`relative_rmse`]: `rmse(a, b) / mean(b)` (the reference's mean over
-//!   pixels and channels): a scale-free number, comparable across scenes.
-//!   A per-pixel relative error would blow up on black pixels.
+//! - [`relative_rmse_masked`]: `rmse(a, b) / mean(b)` over the kept pixels
+//!   (the reference's mean over them and the channels): a scale-free number,
+//!   comparable across scenes. A per-pixel relative error would blow up on
+//!   black pixels. Pass a mask of all `true` to keep every pixel.
 
 use super::Image;
 use crate::error::{Error, Result};
@@ -39,19 +40,9 @@ pub fn rmse(a: &Image, b: &Image) -> Result<f64> {
     Ok((sum / (3 * a.pixels.len().max(1)) as f64).sqrt())
 }
 
-/// [`rmse`] over the reference's mean value (0 when that mean is 0).
-///
-/// # Errors
-/// As [`rmse`].
-pub fn relative_rmse(a: &Image, reference: &Image) -> Result<f64> {
-    let e = rmse(a, reference)?;
-    let m = reference.mean().as_dvec3().element_sum() / 3.0;
-    Ok(if m > 0.0 { e / m } else { 0.0 })
-}
-
-/// [`relative_rmse`] over the pixels where `keep` is true (the others, for
-/// instance the light's own pixels, are left out of both the error and the
-/// reference's mean).
+/// [`rmse`] over the reference's mean value (0 when that mean is 0), both
+/// over the pixels where `keep` is true (the others, for instance the
+/// light's own pixels, are left out of both the error and the mean).
 ///
 /// # Errors
 /// As [`rmse`], and when `keep` has not one entry per pixel.

@@ -96,12 +96,12 @@ pub mod sampler;
 pub use cache::{CacheConfig, IrradianceCache};
 pub use camera::CameraRays;
 pub use direct::LightSampler;
-pub use estimate::{irradiance_default, irradiance_estimate, radiance_estimate, Estimate, Lookup};
+pub use estimate::{irradiance_estimate, radiance_estimate, Estimate, Lookup};
 #[cfg(feature = "image-io")]
 #[cfg_attr(docsrs, doc(cfg(feature = "image-io")))]
 pub use image::ExrFile;
 pub use image::{check_output_path, tile_rows, Image, ToneMap, MAX_DIMENSION};
-pub use metrics::{mean_bias, relative_rmse, relative_rmse_masked, rmse};
+pub use metrics::{mean_bias, relative_rmse_masked, rmse};
 pub use path::{Integrator, PathPart, PathTracer};
 pub use path_render::{
     indirect_irradiance, light_pixels, render_path, render_path_with, specular_pixels, PathHalves,

@@ -7,7 +7,7 @@
 //! gltf crate's readers never slice out of range nor allocate more than the
 //! file holds.
 
-use super::validate::{component_size, label, multiplicity};
+use super::gltf_checks::{component_size, label, multiplicity};
 use crate::error::{Error, Result};
 use gltf::json::accessor::ComponentType;
 use gltf::json::validation::Checked;

@@ -13,7 +13,7 @@
 //! over [`MAX_NODE_INSTANCES`] nodes or [`MAX_INSTANCED_TRIANGLES`]
 //! triangles is refused before any vertex is transformed.
 
-use super::validate::{label, MAX_INSTANCED_TRIANGLES, MAX_NODE_INSTANCES};
+use super::gltf_checks::{label, MAX_INSTANCED_TRIANGLES, MAX_NODE_INSTANCES};
 use crate::error::{Error, Result};
 use gltf::json::{
     mesh::{Mode, Semantic},
@@ -44,7 +44,7 @@ fn mesh_triangles(root: &Root, m: usize) -> u64 {
 }
 
 /// Refuses cycles and explosive sharing. Node, mesh and child indices were
-/// checked by [`super::validate::check_document`] before this runs.
+/// checked by [`super::gltf_checks::check_document`] before this runs.
 pub(super) fn check_graph(root: &Root) -> Result<()> {
     let n = root.nodes.len();
     // Per node: (instances, triangles) of its subtree, once finished.

@@ -50,7 +50,7 @@ pub(super) fn load_path(path: &Path) -> Result<Scene> {
 
 /// Loads from bytes; `base` resolves relative buffer URIs (none when `None`).
 ///
-/// Order matters: the JSON is validated ([`super::validate`]) before any of
+/// Order matters: the JSON is validated ([`super::gltf_checks`]) before any of
 /// the gltf crate's panicking accessors is called, buffers are loaded by
 /// [`super::buffers`] (never outside `base`), and byte ranges are checked
 /// ([`super::gltf_data`]) and the node graph bounded ([`super::gltf_graph`])
@@ -65,7 +65,7 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
         source: message.into(),
     })?;
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(wrap)?;
-    super::validate::check_document(gltf.document.as_json())?;
+    super::gltf_checks::check_document(gltf.document.as_json())?;
     let buffers = super::buffers::load_buffers(gltf.document.as_json(), gltf.blob.clone(), base)?;
     super::gltf_data::check_data(gltf.document.as_json(), &buffers)?;
     super::gltf_graph::check_graph(gltf.document.as_json())?;
@@ -84,7 +84,7 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
     };
     let mut stack: Vec<(gltf::Node, Mat4)> = root.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     stack.reverse();
-    // The graph is acyclic and its expansion bounded (validate::check_document).
+    // The graph is acyclic and its expansion bounded (gltf_checks::check_document).
     while let Some((node, parent)) = stack.pop() {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         load_node(
@@ -98,7 +98,7 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
         .map_err(|e| match e {
             Error::InvalidScene(m) => Error::InvalidScene(format!(
                 "{}: {m}",
-                super::validate::label("node", node.index(), node.name())
+                super::gltf_checks::label("node", node.index(), node.name())
             )),
             other => other,
         })?;
@@ -126,7 +126,7 @@ fn load_node(
         ));
     }
     if let Some(mesh) = node.mesh() {
-        let mesh_label = super::validate::label("mesh", mesh.index(), mesh.name());
+        let mesh_label = super::gltf_checks::label("mesh", mesh.index(), mesh.name());
         // glTF 2.0 §3.7.4: a negative determinant mirrors the node, which
         // reverses its triangles' winding (and so their front side).
         let mirrored = glam::Mat3::from_mat4(*world).determinant() < 0.0;
@@ -212,7 +212,7 @@ fn spec_default_material() -> Result<Material> {
 
 fn convert_material(m: &gltf::Material) -> Result<Material> {
     let label = match m.index() {
-        Some(i) => super::validate::label("material", i, m.name()),
+        Some(i) => super::gltf_checks::label("material", i, m.name()),
         None => "the default material".to_string(),
     };
     let pbr = m.pbr_metallic_roughness();
@@ -295,7 +295,7 @@ fn convert_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Resu
             inner_cone_angle,
             outer_cone_angle,
         } => {
-            // Ranges were checked by validate::check_light: no silent clamp.
+            // Ranges were checked by gltf_checks::check_light: no silent clamp.
             let (inner, outer) = (inner_cone_angle, outer_cone_angle);
             Ok(Light::Spot(SpotLight {
                 position,

@@ -13,6 +13,8 @@ mod checks;
 #[cfg(feature = "gltf")]
 mod cornell;
 #[cfg(feature = "gltf")]
+pub mod gltf_checks;
+#[cfg(feature = "gltf")]
 mod gltf_data;
 #[cfg(feature = "gltf")]
 mod gltf_graph;
@@ -21,8 +23,6 @@ mod gltf_load;
 mod light;
 mod prepared;
 mod surface;
-#[cfg(feature = "gltf")]
-pub mod validate;
 
 #[cfg(feature = "gltf")]
 pub use buffers::{percent_decode, resolve_inside, MAX_BUFFER_BYTES};

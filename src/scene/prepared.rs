@@ -44,9 +44,4 @@ impl<C> PreparedScene<C> {
     pub fn caster(&self) -> &C {
         &self.caster
     }
-
-    /// Both halves back.
-    pub fn into_parts(self) -> (Scene, C) {
-        (self.scene, self.caster)
-    }
 }

@@ -54,6 +54,9 @@ fn trace_json_has_every_documented_key() {
         "mean_density_primary",
         "sigma_density_primary",
         "trace_s",
+        // tools/trace_readme.py and tools/trace_rounds.py read these two.
+        "rays",
+        "rays_per_s",
         "build_s",
         "bytes_per_photon",
         "budget_bound",

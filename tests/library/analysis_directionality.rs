@@ -435,3 +435,53 @@ fn table_interpolates_direct_analyses_and_cache_runs_each_once() {
     assert_eq!(cache.analyses(), 5);
     assert_eq!(cache.len(), 5);
 }
+
+/// The default analysis (24 averaged stratified sets of 128 samples) is
+/// stable from seed to seed: over 64 seeds the relative standard deviation
+/// of `alpha_D` is below 10 % for a `cos^n` emitter, Phong and rough
+/// Cook–Torrance at theta_in = 30° (measured at the default seeds: 1.0 % to
+/// 1.4 % for cos^10, cos^100 and Phong 100, 5.2 % for Cook–Torrance
+/// m = 0.3). The single i.i.d. set it replaced spread far more (the table
+/// in `AnalysisParams`' docs: 22 % on Phong 100 at 512 samples, 70 % and
+/// bimodal on Cook–Torrance): a bound of 10 % lies between the two, and a
+/// spread estimated from 64 seeds has a standard error of 9 % of itself.
+#[test]
+fn default_analysis_is_stable_across_seeds() {
+    let theta_in = 0.75f32.sqrt();
+    let functions: [(&str, Option<Brdf>, f32); 4] = [
+        ("cos^10", None, 10.0),
+        ("cos^100", None, 100.0),
+        (
+            "Phong 100",
+            Some(
+                Phong::new(Vec3::ZERO, Vec3::splat(0.9), 100.0)
+                    .unwrap()
+                    .into(),
+            ),
+            0.0,
+        ),
+        (
+            "Cook-Torrance 0.3",
+            Some(
+                CookTorrance::new(0.3, Vec3::splat(0.9), Vec3::ZERO)
+                    .unwrap()
+                    .into(),
+            ),
+            0.0,
+        ),
+    ];
+    for (name, brdf, n) in functions {
+        let alphas = (0..64).map(|s| {
+            let p = params(s);
+            let a = match &brdf {
+                Some(b) => analyze_brdf_at(b, theta_in, Estimator::Paper, &p),
+                None => analyze_emitter(&CosN::new(n).unwrap(), Estimator::Paper, &p),
+            };
+            a.unwrap().alpha_d as f64
+        });
+        let m = common::MeanVar::of(alphas);
+        let rel = m.variance().sqrt() / m.mean();
+        eprintln!("{name}: alpha_D {:.4}, relative sd {:.3}", m.mean(), rel);
+        assert!(rel < 0.1, "{name}: relative sd {rel} over 64 seeds");
+    }
+}

@@ -129,8 +129,11 @@ fn mismatches_are_errors_not_panics() {
     assert!(PreparedScene::new(swapped, rt).is_ok());
 }
 
+/// An edit of a hit.
+type HitEdit = fn(Hit) -> Hit;
+
 /// A caster that breaks the contract one way: Embree's hits, edited.
-struct Garbled(CommittedScene, fn(Hit) -> Hit);
+struct Garbled(CommittedScene, HitEdit);
 
 impl RayCaster for Garbled {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
@@ -149,7 +152,7 @@ impl RayCaster for Garbled {
 fn hits_that_break_the_contract_fail_the_trace_and_the_render() {
     let device = Device::new().unwrap();
     let cornell = Scene::cornell().unwrap();
-    let cases: [(fn(Hit) -> Hit, &str); 5] = [
+    let cases: [(HitEdit, &str); 5] = [
         (|h| Hit { t: f32::NAN, ..h }, "t = NaN"),
         (
             |h| Hit {
