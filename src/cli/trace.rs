@@ -2,8 +2,10 @@
 //! the engine, its counts, its maps' density statistics and timings.
 
 use super::common::{open_scene, progress_bar, EmbreeArgs, ThreadArgs, TraceConfigArgs};
+use adaptive_pm::engine::counts::LightPlan;
 use adaptive_pm::engine::{density_points, map_density, primary_density};
-use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
+use adaptive_pm::engine::{Mode, TraceConfig, TraceReport, Tracer};
+use adaptive_pm::photon_map::{DensityStats, PhotonMap};
 use serde_json::json;
 
 /// Arguments of `trace`.
@@ -64,118 +66,160 @@ pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     });
     let checksum =
         super::shard::checksum_and_write(&args.shard, scene, &cfg, &map, (&report, &plans))?;
-    let peak_rss_bytes = peak_rss_bytes();
-    let out = (report, plans);
-    let r = &out.0;
-    let value = json!({
-        "scene": args.scene,
-        "mode": args.mode.name(),
-        "n_max": r.n_max,
-        "seed": cfg.seed,
-        "threads": pool.current_num_threads(),
-        "emitted": r.emitted,
-        "emitted_per_light": r.emitted_per_light,
-        "lights": out.1,
-        "stored": r.stored,
-        "stored_primary": r.stored_primary,
-        "reemitted_first_hit": r.reemitted_first_hit,
-        "split_rate_by_depth": r.split_rate_by_depth,
-        "depths": r.depths,
-        "max_density": full.max,
-        "mean_density": full.mean,
-        "sigma_density": full.sigma,
-        "sigma_over_mean": full.sigma_over_mean,
-        "max_density_primary": primary.max,
-        "mean_density_primary": primary.mean,
-        "sigma_density_primary": primary.sigma,
-        "sigma_over_mean_primary": primary.sigma_over_mean,
-        "trace_s": r.trace_s,
-        "rays": r.rays,
-        "rays_per_s": r.rays_per_s,
-        "peak_rss_bytes": peak_rss_bytes,
-        "map_bytes": map.memory_bytes(),
-        "trace_primary_s": r.trace_primary_s,
-        "build_s": build_s,
-        "bytes_per_photon": map.bytes_per_photon(),
-        "budget_bound": r.budget_bound,
-        "capped_hits": r.capped_hits,
-        "density_rejected": r.density_rejected,
-        "stored_power": r.stored_power,
-        "shard": cfg.shard.to_string(),
-        "checksum": format!("{checksum:016x}"),
-        "embree_isa": r.kernels.map(|k| k.isa),
-        "embree_version": r.kernels.map(|k| adaptive_pm::isa::version_name(k.version_code())),
-        "math_variant": r.math,
-    });
+    let outcome = Outcome {
+        args: &args,
+        cfg: &cfg,
+        report: &report,
+        plans: &plans,
+        full,
+        primary,
+        map: &map,
+        build_s,
+        peak_rss_bytes: peak_rss_bytes(),
+        checksum,
+        threads: pool.current_num_threads(),
+    };
     if args.json {
-        println!("{value}");
-        return Ok(());
+        println!("{}", outcome.json());
+    } else {
+        outcome.print();
     }
-    println!(
-        "{} on {}: N_MAX = {}, seed {}, {} threads",
-        args.mode.name(),
-        args.scene,
-        r.n_max,
-        cfg.seed,
-        pool.current_num_threads()
-    );
-    for (i, p) in out.1.iter().enumerate() {
-        println!(
-            "  light {i}: {} photons (alpha_E {:.3}, alpha_A {:.3}, alpha_D {:.4})",
-            p.photons, p.alpha_e, p.alpha_a, p.alpha_d
-        );
-    }
-    println!("emitted        {}", r.emitted);
-    println!("stored         {} ({} primary)", r.stored, r.stored_primary);
-    println!(
-        "re-emitted     {} after the first hit",
-        r.reemitted_first_hit
-    );
-    let rates: Vec<String> = r
-        .split_rate_by_depth
-        .iter()
-        .map(|x| format!("{x:.3}"))
-        .collect();
-    println!("split rate     {} (by depth)", rates.join(" "));
-    println!(
-        "density        max {:.4e}  mean {:.4e}  sigma {:.4e}  sigma/mean {:.3}",
-        full.max, full.mean, full.sigma, full.sigma_over_mean
-    );
-    println!(
-        "primary        max {:.4e}  mean {:.4e}  sigma {:.4e}  sigma/mean {:.3}",
-        primary.max, primary.mean, primary.sigma, primary.sigma_over_mean
-    );
-    println!(
-        "time           trace {:.3} s ({:.2} Mrays/s), kd-tree {:.3} s",
-        r.trace_s, r.mrays_per_s, build_s
-    );
-    println!(
-        "memory         {} bytes per photon, map {} MB, peak RSS {} MB",
-        map.bytes_per_photon(),
-        map.memory_bytes() >> 20,
-        peak_rss_bytes >> 20
-    );
-    if r.budget_bound {
-        println!("note: the memory budget bound (raise --budget-mb)");
-    }
-    if r.capped_hits > 0 {
-        println!(
-            "note: the per-hit split cap bound at {} hits",
-            r.capped_hits
-        );
-    }
-    let kernels = r.kernels.map_or("-".into(), |k| {
-        format!(
-            "{} of Embree {}",
-            k.isa,
-            adaptive_pm::isa::version_name(k.version_code())
-        )
-    });
-    println!(
-        "checksum       {checksum:016x} (shard {}, Embree kernels {kernels})",
-        cfg.shard
-    );
     Ok(())
+}
+
+/// What a trace did, for its report.
+struct Outcome<'a> {
+    args: &'a TraceArgs,
+    cfg: &'a TraceConfig,
+    report: &'a TraceReport,
+    plans: &'a [LightPlan],
+    full: DensityStats,
+    primary: DensityStats,
+    map: &'a PhotonMap,
+    build_s: f64,
+    peak_rss_bytes: u64,
+    checksum: u64,
+    threads: usize,
+}
+
+impl Outcome<'_> {
+    /// The `--json` object.
+    fn json(&self) -> serde_json::Value {
+        let o = self;
+        json!({
+            "scene": o.args.scene,
+            "mode": o.args.mode.name(),
+            "n_max": o.report.n_max,
+            "seed": o.cfg.seed,
+            "threads": o.threads,
+            "emitted": o.report.emitted,
+            "emitted_per_light": o.report.emitted_per_light,
+            "lights": o.plans,
+            "stored": o.report.stored,
+            "stored_primary": o.report.stored_primary,
+            "reemitted_first_hit": o.report.reemitted_first_hit,
+            "split_rate_by_depth": o.report.split_rate_by_depth,
+            "depths": o.report.depths,
+            "max_density": o.full.max,
+            "mean_density": o.full.mean,
+            "sigma_density": o.full.sigma,
+            "sigma_over_mean": o.full.sigma_over_mean,
+            "max_density_primary": o.primary.max,
+            "mean_density_primary": o.primary.mean,
+            "sigma_density_primary": o.primary.sigma,
+            "sigma_over_mean_primary": o.primary.sigma_over_mean,
+            "trace_s": o.report.trace_s,
+            "rays": o.report.rays,
+            "rays_per_s": o.report.rays_per_s,
+            "peak_rss_bytes": o.peak_rss_bytes,
+            "map_bytes": o.map.memory_bytes(),
+            "trace_primary_s": o.report.trace_primary_s,
+            "build_s": o.build_s,
+            "bytes_per_photon": o.map.bytes_per_photon(),
+            "budget_bound": o.report.budget_bound,
+            "capped_hits": o.report.capped_hits,
+            "density_rejected": o.report.density_rejected,
+            "stored_power": o.report.stored_power,
+            "shard": o.cfg.shard.to_string(),
+            "checksum": format!("{:016x}", o.checksum),
+            "embree_isa": o.report.kernels.map(|k| k.isa),
+            "embree_version": o.report.kernels.map(|k| adaptive_pm::isa::version_name(k.version_code())),
+            "math_variant": o.report.math,
+        })
+    }
+
+    /// The text report.
+    fn print(&self) {
+        let o = self;
+        println!(
+            "{} on {}: N_MAX = {}, seed {}, {} threads",
+            o.args.mode.name(),
+            o.args.scene,
+            o.report.n_max,
+            o.cfg.seed,
+            o.threads
+        );
+        for (i, p) in o.plans.iter().enumerate() {
+            println!(
+                "  light {i}: {} photons (alpha_E {:.3}, alpha_A {:.3}, alpha_D {:.4})",
+                p.photons, p.alpha_e, p.alpha_a, p.alpha_d
+            );
+        }
+        println!("emitted        {}", o.report.emitted);
+        println!(
+            "stored         {} ({} primary)",
+            o.report.stored, o.report.stored_primary
+        );
+        println!(
+            "re-emitted     {} after the first hit",
+            o.report.reemitted_first_hit
+        );
+        let rates: Vec<String> = o
+            .report
+            .split_rate_by_depth
+            .iter()
+            .map(|x| format!("{x:.3}"))
+            .collect();
+        println!("split rate     {} (by depth)", rates.join(" "));
+        println!(
+            "density        max {:.4e}  mean {:.4e}  sigma {:.4e}  sigma/mean {:.3}",
+            o.full.max, o.full.mean, o.full.sigma, o.full.sigma_over_mean
+        );
+        println!(
+            "primary        max {:.4e}  mean {:.4e}  sigma {:.4e}  sigma/mean {:.3}",
+            o.primary.max, o.primary.mean, o.primary.sigma, o.primary.sigma_over_mean
+        );
+        println!(
+            "time           trace {:.3} s ({:.2} Mrays/s), kd-tree {:.3} s",
+            o.report.trace_s, o.report.mrays_per_s, o.build_s
+        );
+        println!(
+            "memory         {} bytes per photon, map {} MB, peak RSS {} MB",
+            o.map.bytes_per_photon(),
+            o.map.memory_bytes() >> 20,
+            o.peak_rss_bytes >> 20
+        );
+        if o.report.budget_bound {
+            println!("note: the memory budget bound (raise --budget-mb)");
+        }
+        if o.report.capped_hits > 0 {
+            println!(
+                "note: the per-hit split cap bound at {} hits",
+                o.report.capped_hits
+            );
+        }
+        let kernels = o.report.kernels.map_or("-".into(), |k| {
+            format!(
+                "{} of Embree {}",
+                k.isa,
+                adaptive_pm::isa::version_name(k.version_code())
+            )
+        });
+        println!(
+            "checksum       {:016x} (shard {}, Embree kernels {kernels})",
+            o.checksum, o.cfg.shard
+        );
+    }
 }
 
 /// The process's peak resident memory (`VmHWM` of /proc/self/status), in

@@ -405,6 +405,118 @@ fn run_one(
     })
 }
 
+/// The sweep's scene: exactly one light, an area light (the one whose
+/// exponent the sweep varies).
+fn sweep_scene(cfg: &CornellConfig) -> Result<Scene> {
+    let scene = Scene::open(&cfg.scene)?;
+    let area_lights = scene
+        .lights()
+        .iter()
+        .filter(|l| matches!(l, Light::Area(_)))
+        .count();
+    if area_lights != 1 || scene.lights().len() != 1 {
+        return Err(Error::InvalidScene(format!(
+            "the Cornell sweep needs a scene with exactly one light, an area light; `{}` has {} lights ({} area)",
+            cfg.scene,
+            scene.lights().len(),
+            area_lights
+        )));
+    }
+    Ok(scene)
+}
+
+/// One timing row per mode run, classic always (the reference is classic).
+fn mode_timings(modes: &[Mode]) -> Vec<ModeTiming> {
+    let mut timed = modes.to_vec();
+    if !timed.contains(&Mode::Classic) {
+        timed.push(Mode::Classic);
+    }
+    timed
+        .iter()
+        .map(|&m| ModeTiming {
+            mode: Some(m),
+            ..ModeTiming::default()
+        })
+        .collect()
+}
+
+/// Adds a run's times to its mode's row.
+fn account(timing: &mut [ModeTiming], r: &RunMetrics) {
+    if let Some(t) = timing.iter_mut().find(|t| t.mode == Some(r.mode)) {
+        t.runs += 1;
+        t.emitted += r.emitted;
+        t.trace_s += r.trace_s;
+        t.build_s += r.build_s + r.build_primary_s;
+        t.measure_s += r.measure_s;
+    }
+}
+
+/// Density control's settings, its target from the diffuse reference. A
+/// diffuse classic run that stored nothing (N_MAX = 0) leaves no target:
+/// density control then falls back to its automatic one.
+fn density_config(cfg: &CornellConfig, reference: &RunMetrics) -> TraceConfig {
+    let mut density_cfg = cfg.trace_config(Mode::Density);
+    let target = match cfg.density_target {
+        SweepDensityTarget::ReferenceMean => reference.mean_density,
+        SweepDensityTarget::ReferenceMax => reference.max_density_primary,
+        SweepDensityTarget::PerArea(d) => d,
+    };
+    if target > 0.0 && target.is_finite() {
+        density_cfg.density_target = DensityTarget::PerArea(target);
+    }
+    density_cfg
+}
+
+/// `job(i)` for every `i < count`, each on one of `pools` (one thread each)
+/// as they come free; the runs in the order of `i`, or the first error (the
+/// jobs not started when one fails are skipped).
+fn over_pools(
+    pools: &[rayon::ThreadPool],
+    count: usize,
+    job: &(dyn Fn(usize) -> Result<Vec<RunMetrics>> + Sync),
+) -> Result<Vec<RunMetrics>> {
+    let next = AtomicUsize::new(0);
+    let failed = AtomicBool::new(false);
+    let slots: Vec<Mutex<Option<Result<Vec<RunMetrics>>>>> =
+        (0..count).map(|_| Mutex::new(None)).collect();
+    std::thread::scope(|s| {
+        for pool in pools {
+            s.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                if i >= count || failed.load(Ordering::Relaxed) {
+                    break;
+                }
+                let r = pool.install(|| job(i));
+                failed.fetch_or(r.is_err(), Ordering::Relaxed);
+                if let Ok(mut slot) = slots[i].lock() {
+                    *slot = Some(r);
+                }
+            });
+        }
+    });
+    gather_runs(slots)
+}
+
+/// The runs of every `n`, in order, or the first error (a slot left empty
+/// was skipped after another failed).
+fn gather_runs(slots: Vec<Mutex<Option<Result<Vec<RunMetrics>>>>>) -> Result<Vec<RunMetrics>> {
+    let mut runs = Vec::new();
+    let mut first_error = None;
+    for slot in slots {
+        match slot.into_inner().ok().flatten() {
+            Some(Ok(r)) => runs.extend(r),
+            Some(Err(e)) => {
+                first_error.get_or_insert(e);
+            }
+            None => {}
+        }
+    }
+    match first_error {
+        Some(e) => Err(e),
+        None => Ok(runs),
+    }
+}
+
 /// Runs the sweep with as many workers as the current rayon pool has threads
 /// (wrap it in `pool.install` to choose). `progress` is called as traces
 /// finish, from the worker threads.
@@ -428,45 +540,13 @@ pub fn run_cornell(
         .ok_or_else(|| Error::param("n sweep", "empty"))?;
     let analysis_s = t.elapsed().as_secs_f64();
 
-    let mut scene = Scene::open(&cfg.scene)?;
-    let area_lights = scene
-        .lights()
-        .iter()
-        .filter(|l| matches!(l, Light::Area(_)))
-        .count();
-    if area_lights != 1 || scene.lights().len() != 1 {
-        return Err(Error::InvalidScene(format!(
-            "the Cornell sweep needs a scene with exactly one light, an area light; `{}` has {} lights ({} area)",
-            cfg.scene,
-            scene.lights().len(),
-            area_lights
-        )));
-    }
+    let mut scene = sweep_scene(cfg)?;
     let mesh_names: Vec<String> = scene.meshes().iter().map(|m| m.name.clone()).collect();
     let device = Device::pinned_or_default(cfg.embree_isa)?;
     let rt = scene.embree_geometry(&device)?;
     let points = density_points(&scene);
     let total = cfg.run_count();
-    let mut timed = cfg.modes.clone();
-    if !timed.contains(&Mode::Classic) {
-        timed.push(Mode::Classic);
-    }
-    let mut timing: Vec<ModeTiming> = timed
-        .iter()
-        .map(|&m| ModeTiming {
-            mode: Some(m),
-            ..ModeTiming::default()
-        })
-        .collect();
-    let account = |timing: &mut Vec<ModeTiming>, r: &RunMetrics| {
-        if let Some(t) = timing.iter_mut().find(|t| t.mode == Some(r.mode)) {
-            t.runs += 1;
-            t.emitted += r.emitted;
-            t.trace_s += r.trace_s;
-            t.build_s += r.build_s + r.build_primary_s;
-            t.measure_s += r.measure_s;
-        }
-    };
+    let mut timing = mode_timings(&cfg.modes);
 
     progress(CornellProgress {
         done: 0,
@@ -492,22 +572,14 @@ pub fn run_cornell(
     })?;
     account(&mut timing, &reference);
     let done = AtomicUsize::new(1);
-    let mut density_cfg = cfg.trace_config(Mode::Density);
-    let target = match cfg.density_target {
-        SweepDensityTarget::ReferenceMean => reference.mean_density,
-        SweepDensityTarget::ReferenceMax => reference.max_density_primary,
-        SweepDensityTarget::PerArea(d) => d,
-    };
-    // A diffuse classic run that stored nothing (N_MAX = 0) leaves no target:
-    // density control then falls back to its automatic one.
-    if target > 0.0 && target.is_finite() {
-        density_cfg.density_target = DensityTarget::PerArea(target);
-    }
+    let density_cfg = density_config(cfg, &reference);
 
     // Every run at one n, in mode order, on the calling thread's pool.
-    let runs_at = |scene: &mut Scene, n: f64, a: &AlphaRow| -> Result<Vec<RunMetrics>> {
+    let runs_at = |i: usize| -> Result<Vec<RunMetrics>> {
+        let (n, a) = (cfg.n_values[i], &alpha[i]);
+        let mut scene = scene.clone();
         scene.set_cosn(CosN::new(n as f32)?);
-        let tracer = Tracer::new(PreparedScene::new(scene.clone(), &rt)?);
+        let tracer = Tracer::new(PreparedScene::new(scene, &rt)?);
         let mut out = Vec::with_capacity(cfg.modes.len());
         for &mode in &cfg.modes {
             if mode == Mode::Classic && n == 0.0 {
@@ -528,43 +600,7 @@ pub fn run_cornell(
         }
         Ok(out)
     };
-    let next = AtomicUsize::new(0);
-    let failed = AtomicBool::new(false);
-    let slots: Vec<Mutex<Option<Result<Vec<RunMetrics>>>>> =
-        cfg.n_values.iter().map(|_| Mutex::new(None)).collect();
-    std::thread::scope(|s| {
-        for pool in &pools {
-            s.spawn(|| {
-                let mut scene = scene.clone();
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    if i >= cfg.n_values.len() || failed.load(Ordering::Relaxed) {
-                        break;
-                    }
-                    let r = pool.install(|| runs_at(&mut scene, cfg.n_values[i], &alpha[i]));
-                    failed.fetch_or(r.is_err(), Ordering::Relaxed);
-                    if let Ok(mut slot) = slots[i].lock() {
-                        *slot = Some(r);
-                    }
-                }
-            });
-        }
-    });
-    let mut runs = Vec::with_capacity(cfg.n_values.len() * cfg.modes.len());
-    let mut first_error = None;
-    for slot in slots {
-        match slot.into_inner().ok().flatten() {
-            Some(Ok(r)) => runs.extend(r),
-            Some(Err(e)) => {
-                first_error.get_or_insert(e);
-            }
-            // Skipped after another run failed.
-            None => {}
-        }
-    }
-    if let Some(e) = first_error {
-        return Err(e);
-    }
+    let runs = over_pools(&pools, cfg.n_values.len(), &runs_at)?;
     for r in &runs {
         if !(r.mode == Mode::Classic && r.n == 0.0) {
             account(&mut timing, r);
