@@ -12,7 +12,7 @@
 use adaptive_pm::embree::Device;
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::engine::{
-    density_points, measure, Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer,
+    density_points, map_metrics, Budget, DensityTarget, Maps, Mode, TraceConfig, Tracer,
 };
 use adaptive_pm::scene::{PreparedScene, Scene};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -40,7 +40,7 @@ fn modes(c: &mut Criterion) {
         .trace(&classic)
         .unwrap();
     let ref_maps = Maps::from_photons(reference.photons.clone(), reference.frame);
-    let target = measure(&ref_maps, &points).full.mean;
+    let target = map_metrics(&ref_maps, &points).full.mean;
 
     let mut group = c.benchmark_group("modes");
     for (scene, n) in scenes.iter().zip(EXPONENTS) {
@@ -78,7 +78,7 @@ fn modes(c: &mut Criterion) {
             let maps = Maps::from_photons(out.photons.clone(), out.frame);
             group.throughput(Throughput::Elements(2 * points.len() as u64));
             group.bench_function(BenchmarkId::new("measure", &id), |b| {
-                b.iter(|| measure(&maps, &points).full.max)
+                b.iter(|| map_metrics(&maps, &points).full.max)
             });
         }
     }

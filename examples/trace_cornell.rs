@@ -6,7 +6,7 @@
 use adaptive_pm::embree::{thread_pool, Device};
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::engine::measure::{DENSITY_POINTS, DENSITY_POINTS_SEED};
-use adaptive_pm::engine::{measure, Budget, Maps, Mode, TraceConfig, Tracer};
+use adaptive_pm::engine::{map_metrics, Budget, Maps, Mode, TraceConfig, Tracer};
 use adaptive_pm::scene::Scene;
 
 fn main() -> Result<(), adaptive_pm::Error> {
@@ -49,7 +49,7 @@ fn main() -> Result<(), adaptive_pm::Error> {
     let points = scene
         .surface_sampler()
         .points(DENSITY_POINTS, DENSITY_POINTS_SEED);
-    let metrics = pool.install(|| measure(&maps, &points));
+    let metrics = pool.install(|| map_metrics(&maps, &points));
     println!(
         "density: max {:.3e}, mean {:.3e}, sigma/mean {:.3}",
         metrics.full.max, metrics.full.mean, metrics.full.sigma_over_mean

@@ -159,7 +159,7 @@ pub struct MapMetrics {
 }
 
 /// Evaluates the density of both maps at `points`.
-pub fn measure(maps: &Maps, points: &[SurfacePoint]) -> MapMetrics {
+pub fn map_metrics(maps: &Maps, points: &[SurfacePoint]) -> MapMetrics {
     MapMetrics {
         full: map_density(&maps.full, points),
         primary: map_density(&maps.primary, points),

@@ -30,7 +30,7 @@ pub mod wave;
 
 pub use buffer::{map_frame, POWER_HEADROOM};
 pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig, PAPER_N_MAX};
-pub use measure::{density_points, map_density, measure, primary_density, MapMetrics, Maps};
+pub use measure::{density_points, map_density, map_metrics, primary_density, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};
 pub use shard::Shard;
 pub use tracer::{TraceOutput, TraceProgress, Tracer};

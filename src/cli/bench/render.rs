@@ -16,7 +16,7 @@ pub struct RenderBenchArgs {
     #[arg(default_value = "cornell")]
     pub scene: String,
     /// Override every area light's cos^n exponent.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::cli::common::parse_finite)]
     pub cosn: Option<f32>,
     /// Image side in pixels.
     #[arg(long, default_value_t = 256)]

@@ -32,7 +32,7 @@ pub struct TradeoffArgs {
     #[arg(long, default_value_t = 3)]
     pub seeds: u32,
     /// Override every area light's cos^n exponent.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::cli::common::parse_finite)]
     pub cosn: Option<f32>,
     /// Image width.
     #[arg(long, default_value_t = 32)]

@@ -99,7 +99,7 @@ pub(crate) fn estimated_error(
 }
 
 /// Measures one run.
-pub(crate) fn measure(
+pub(crate) fn measure_run(
     prepared: &Arc<EmbreeScene>,
     cfg: &TradeoffConfig,
     reference: &Reference,

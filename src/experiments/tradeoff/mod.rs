@@ -258,7 +258,8 @@ pub fn run_tradeoff(
                     runs.len(),
                     format!("{} N_MAX {n_max} seed {}", mode.name(), s + 1),
                 );
-                let (run, out) = measure::measure(&prepared, cfg, &reference, mode, n_max, s + 1)?;
+                let (run, out) =
+                    measure::measure_run(&prepared, cfg, &reference, mode, n_max, s + 1)?;
                 runs.push(run);
                 outputs.push(out);
             }
