@@ -51,6 +51,11 @@ pub(super) fn check_data(root: &Root, buffers: &[Vec<u8>]) -> Result<()> {
         };
         let elem = component_size(ct.0) * multiplicity(ty);
         let count = a.count.0;
+        // glTF 2.0 requires count >= 1; the gltf crate's reader computes
+        // `count - 1` and overflows on 0 (found by the fuzzer).
+        if count == 0 {
+            return Err(bad(format!("{name} has count 0 (glTF 2.0: at least 1)")));
+        }
         if let Some(v) = a.buffer_view {
             let (_, len, stride) = views[v.value()];
             let stride = stride.unwrap_or(elem);
@@ -60,17 +65,15 @@ pub(super) fn check_data(root: &Root, buffers: &[Vec<u8>]) -> Result<()> {
                 )));
             }
             let offset = a.byte_offset.map_or(0, |o| o.0);
-            if count > 0 {
-                let end = add(
-                    add(offset, mul(stride, count - 1, &name)?, &name)?,
-                    elem,
-                    &name,
-                )?;
-                if end > len {
-                    return Err(bad(format!(
-                        "{name}: {count} elements need {end} bytes, its bufferView has {len}"
-                    )));
-                }
+            let end = add(
+                add(offset, mul(stride, count - 1, &name)?, &name)?,
+                elem,
+                &name,
+            )?;
+            if end > len {
+                return Err(bad(format!(
+                    "{name}: {count} elements need {end} bytes, its bufferView has {len}"
+                )));
             }
         }
         if let Some(s) = &a.sparse {

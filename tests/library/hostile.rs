@@ -62,6 +62,8 @@ fn what_panicked_in_the_gltf_crate_is_an_error() {
         &["camera 0", "orthographic"],
     );
     expect("mesh_index_out_of_range.gltf", &["node 0 (`floor`)", "7"]);
+    // Found by the fuzzer: the gltf crate's reader computes `count - 1`.
+    expect("fuzz-accessor-count-0.gltf", &["count 0"]);
 }
 
 #[test]
