@@ -169,7 +169,7 @@ fn glb_length_under_its_header_is_a_clear_error() {
     // Found by the fuzzer: the gltf crate subtracted 12 from it unchecked.
     let copy = tempfile::tempdir().unwrap();
     let target = copy.path().join("scene.glb");
-    std::fs::copy(dir().join("fuzz-glb-length-under-header"), &target).unwrap();
+    std::fs::copy(dir().join("fuzz-glb-length-under-header.glb"), &target).unwrap();
     let e = Scene::load(&target).unwrap_err();
     assert!(matches!(e, Error::Load { .. }), "{e}");
     let cause = std::error::Error::source(&e).map(|s| s.to_string());
