@@ -7,10 +7,11 @@
 //!
 //! Also: a caster of the user's renders the same image as Embree's.
 
+use crate::fixtures::{cpu_vendor, OneByOne};
 use adaptive_pm::embree::{CommittedScene, Device, EmbreeScene};
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::isa::Isa;
-use adaptive_pm::raycast::{Hit, Ray, RayCaster};
+use adaptive_pm::raycast::RayCaster;
 use adaptive_pm::render::{render, render_path, Image, PathPart, RenderConfig, RenderMaps, View};
 use adaptive_pm::scene::{PreparedScene, Scene};
 
@@ -141,12 +142,6 @@ const RECORDED: &[Recorded] = &[
     ),
 ];
 
-fn cpu_vendor() -> Option<String> {
-    let info = std::fs::read_to_string("/proc/cpuinfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("vendor_id"))?;
-    Some(line.split(':').nth(1)?.trim().to_string())
-}
-
 #[test]
 fn pinned_images_have_the_recorded_checksums() {
     let vendor = cpu_vendor();
@@ -166,19 +161,6 @@ fn pinned_images_have_the_recorded_checksums() {
         checked += 1;
     }
     eprintln!("{checked} recorded image sets reproduced on {vendor:?}");
-}
-
-/// Embree behind the trait's default batch methods: a caster of the user's
-/// whose answers are Embree's bit for bit.
-struct OneByOne(CommittedScene);
-
-impl RayCaster for OneByOne {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.0.intersect(ray)
-    }
-    fn occluded(&self, ray: &Ray) -> bool {
-        self.0.occluded(ray)
-    }
 }
 
 #[test]

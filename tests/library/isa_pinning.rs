@@ -7,6 +7,7 @@
 //! recorded on an AVX2-only AMD EPYC and are reproduced with `avx2` pinned on
 //! an AVX-512 one; Intel's differ, and AVX-512's are the same on both.
 
+use crate::fixtures::cpu_vendor;
 use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Budget, Mode, Shard, TraceConfig, TraceOutput, Tracer};
 use adaptive_pm::isa::Isa;
@@ -68,13 +69,6 @@ const RECORDED: [(Option<&str>, Isa, [u64; 2]); 5] = [
         [0x8118_91c9_451d_cd35, 0x146a_762e_ee2b_d9cd],
     ),
 ];
-
-/// The CPU's vendor string (`vendor_id` of /proc/cpuinfo), if readable.
-fn cpu_vendor() -> Option<String> {
-    let info = std::fs::read_to_string("/proc/cpuinfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("vendor_id"))?;
-    Some(line.split(':').nth(1)?.trim().to_string())
-}
 
 #[test]
 fn pinned_maps_have_the_recorded_checksums() {

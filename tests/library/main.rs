@@ -18,6 +18,7 @@ mod cornell_rays;
 mod dielectric;
 mod embree_wrapper;
 mod engine;
+mod fixtures;
 mod glass_transport;
 mod gltf_conformance;
 mod gltf_glass;

@@ -2,6 +2,7 @@
 //! stored and shared across threads, a caster of the user's own, and the
 //! mismatches that must be errors rather than panics.
 
+use crate::fixtures::OneByOne;
 use adaptive_pm::embree::{thread_pool, CommittedScene, Device};
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::raycast::{Hit, Ray, RayCaster};
@@ -46,19 +47,6 @@ fn a_stored_tracer_traces_from_two_threads_with_the_same_map() {
     let cache = r.tracer.analysis_cache().expect("analysed");
     let again = Tracer::new(Scene::cornell().unwrap().commit(&device).unwrap()).with_cache(cache);
     assert_eq!(pool.install(|| checksum(&again, &cfg)), alone);
-}
-
-/// A caster of the user's: here Embree behind the trait's default (one ray
-/// at a time) batch methods, so its answers are Embree's bit for bit.
-struct OneByOne(CommittedScene);
-
-impl RayCaster for OneByOne {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.0.intersect(ray)
-    }
-    fn occluded(&self, ray: &Ray) -> bool {
-        self.0.occluded(ray)
-    }
 }
 
 #[test]
