@@ -8,7 +8,7 @@ use adaptive_pm::analysis::sampling::{sample, Placement, Target};
 use adaptive_pm::analysis::{
     analyze_brdf, analyze_brdf_at, analyze_emitter, find_peaks, AnalysisParams, Estimator,
 };
-use adaptive_pm::brdf::{Brdf, CookTorrance, Phong};
+use adaptive_pm::brdf::{Brdf, CookTorrance, GltfPbr, Phong};
 use adaptive_pm::emitter::CosN;
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
@@ -18,12 +18,16 @@ type Named = (&'static str, Option<Brdf>, f32);
 fn functions() -> Vec<Named> {
     let phong = Phong::new(Vec3::ZERO, Vec3::splat(0.9), 100.0).unwrap();
     let ct = |m| CookTorrance::new(m, Vec3::splat(0.9), Vec3::ZERO).unwrap();
+    let gltf = |r: f32| GltfPbr::new(Vec3::splat(0.9), 1.0, r * r, 0.04).unwrap();
+    let plastic = GltfPbr::new(Vec3::new(0.8, 0.3, 0.2), 0.0, 0.25, 0.04).unwrap();
     vec![
         ("cosn10", None, 10.0),
         ("cosn100", None, 100.0),
         ("phong100", Some(phong.into()), 0.0),
         ("ct0.3", Some(ct(0.3).into()), 0.0),
         ("ct0.05", Some(ct(0.05).into()), 0.0),
+        ("gltf-metal0.3", Some(gltf(0.3).into()), 0.0),
+        ("gltf-plastic0.5", Some(plastic.into()), 0.0),
     ]
 }
 

@@ -7,7 +7,7 @@
 //! the prepared-scene type a stored tracer holds (`EmbreeScene`:
 //! `Tracer<CommittedScene>` traces one).
 
-pub use crate::brdf::{Brdf, CookTorrance, Lambert, Mirror, Phong};
+pub use crate::brdf::{Brdf, CookTorrance, GltfPbr, Lambert, Mirror, Phong};
 pub use crate::emitter::CosN;
 pub use crate::engine::{Budget, Mode, TraceConfig, TraceOutput, Tracer};
 pub use crate::error::{Error, Result};

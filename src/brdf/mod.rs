@@ -1,7 +1,8 @@
 //! Reflection models: a closed set, dispatched by `match` (no trait objects, so
 //! work queues hold plain `Copy` values). One file per model:
 //! [`Lambert`], [`Phong`] (modified Phong), [`CookTorrance`] (Beckmann,
-//! Schlick, V-cavity), [`Mirror`] (delta), and two transmitting models,
+//! Schlick, V-cavity), [`GltfPbr`] (glTF's metallic-roughness BRDF: GGX,
+//! height-correlated Smith), [`Mirror`] (delta), and two transmitting models,
 //! [`Dielectric`] (smooth glass, delta) and [`RoughDielectric`] (GGX glass,
 //! Walter et al. 2007); [`from_gltf_pbr`] maps glTF metallic-roughness
 //! materials onto them.
@@ -17,7 +18,10 @@
 
 pub mod cook_torrance;
 pub mod dielectric;
+mod ggx;
+mod ggx_energy;
 pub mod gltf_map;
+pub mod gltf_pbr;
 pub mod lambert;
 pub mod mirror;
 pub mod phong;
@@ -26,6 +30,7 @@ pub mod rough_dielectric;
 pub use cook_torrance::CookTorrance;
 pub use dielectric::{Dielectric, Transport};
 pub use gltf_map::{from_gltf_material, from_gltf_pbr, GltfMaterial, GltfVolume};
+pub use gltf_pbr::GltfPbr;
 pub use lambert::Lambert;
 pub use mirror::Mirror;
 pub use phong::Phong;
@@ -72,6 +77,9 @@ pub enum Brdf {
     Phong(Phong),
     /// Cook–Torrance microfacet model with an optional diffuse base.
     CookTorrance(CookTorrance),
+    /// glTF 2.0's metallic-roughness BRDF (GGX, height-correlated Smith,
+    /// Schlick, a Lambertian base).
+    GltfPbr(GltfPbr),
     /// Perfect mirror (delta).
     Mirror(Mirror),
     /// Smooth glass: Fresnel reflection and Snell refraction (delta).
@@ -86,6 +94,7 @@ macro_rules! dispatch {
             Brdf::Lambert($b) => $e,
             Brdf::Phong($b) => $e,
             Brdf::CookTorrance($b) => $e,
+            Brdf::GltfPbr($b) => $e,
             Brdf::Mirror($b) => $e,
             Brdf::Dielectric($b) => $e,
             Brdf::RoughDielectric($b) => $e,
@@ -107,6 +116,7 @@ impl Brdf {
             Brdf::Lambert(b) => b.eval(wi, wo),
             Brdf::Phong(b) => b.eval(wi, wo),
             Brdf::CookTorrance(b) => b.eval(wi, wo),
+            Brdf::GltfPbr(b) => b.eval(wi, wo),
             Brdf::Mirror(b) => b.eval(wi, wo),
             Brdf::Dielectric(b) => b.eval(wi, wo, mode),
             Brdf::RoughDielectric(b) => b.eval(wi, wo, mode),
@@ -126,6 +136,7 @@ impl Brdf {
             Brdf::Lambert(b) => b.sample(wi, u),
             Brdf::Phong(b) => b.sample(wi, u),
             Brdf::CookTorrance(b) => b.sample(wi, u),
+            Brdf::GltfPbr(b) => b.sample(wi, u),
             Brdf::Mirror(b) => b.sample(wi, u),
             Brdf::Dielectric(b) => b.sample(wi, u, mode),
             Brdf::RoughDielectric(b) => b.sample(wi, u, mode),
@@ -179,12 +190,13 @@ impl Brdf {
     }
 
     /// A short name of the model (`lambert`, `phong`, `cook-torrance`,
-    /// `mirror`, `dielectric`, `rough-dielectric`).
+    /// `gltf-pbr`, `mirror`, `dielectric`, `rough-dielectric`).
     pub fn kind(&self) -> &'static str {
         match self {
             Brdf::Lambert(_) => "lambert",
             Brdf::Phong(_) => "phong",
             Brdf::CookTorrance(_) => "cook-torrance",
+            Brdf::GltfPbr(_) => "gltf-pbr",
             Brdf::Mirror(_) => "mirror",
             Brdf::Dielectric(_) => "dielectric",
             Brdf::RoughDielectric(_) => "rough-dielectric",
@@ -207,6 +219,11 @@ impl Brdf {
             Brdf::CookTorrance(b) => {
                 let (d, f) = (b.kd(), b.f0());
                 (3, [d.x, d.y, d.z, f.x, f.y, f.z, b.roughness(), 0.0, 0.0])
+            }
+            Brdf::GltfPbr(b) => {
+                let c = b.base_color();
+                let (m, a, f) = (b.metallic(), b.alpha(), b.dielectric_f0());
+                (7, [c.x, c.y, c.z, m, a, f, 0.0, 0.0, 0.0])
             }
             Brdf::Mirror(b) => {
                 let r = b.reflectance();
@@ -249,6 +266,11 @@ impl From<Phong> for Brdf {
 impl From<CookTorrance> for Brdf {
     fn from(b: CookTorrance) -> Self {
         Brdf::CookTorrance(b)
+    }
+}
+impl From<GltfPbr> for Brdf {
+    fn from(b: GltfPbr) -> Self {
+        Brdf::GltfPbr(b)
     }
 }
 impl From<Mirror> for Brdf {

@@ -82,17 +82,17 @@ use super::dielectric::{
     check_attenuation, check_ior, fresnel_dielectric, radiance_scale, refract,
     thin_slab_reflectance, Transport,
 };
+use super::ggx::Ggx;
 use super::phong::check_rgb01;
 use super::BrdfSample;
 use crate::error::{Error, Result};
 use crate::rng::hash2;
 use glam::Vec3;
-use std::f32::consts::PI;
 
 /// The rough dielectric BSDF; see the module docs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RoughDielectric {
-    alpha: f32,
+    ggx: Ggx,
     ior: f32,
     tint: Vec3,
     attenuation: Vec3,
@@ -147,7 +147,7 @@ impl RoughDielectric {
             ));
         }
         Ok(RoughDielectric {
-            alpha,
+            ggx: Ggx { alpha },
             ior: check_ior("rough dielectric ior", ior)?,
             tint: check_rgb01("rough dielectric tint", tint)?,
             attenuation: check_attenuation("rough dielectric attenuation", attenuation)?,
@@ -157,7 +157,7 @@ impl RoughDielectric {
 
     /// GGX alpha.
     pub fn alpha(&self) -> f32 {
-        self.alpha
+        self.ggx.alpha
     }
 
     /// Index of refraction, inside over outside.
@@ -186,72 +186,6 @@ impl RoughDielectric {
         self.ior == 1.0
     }
 
-    /// GGX `D(m)` for `m` on the outer hemisphere (0 below). Written with
-    /// the components, exact near the pole: `alpha^2 m.z^2 + m.x^2 + m.y^2`
-    /// is `m.z^2 (alpha^2 + tan^2)` for a unit `m`.
-    fn d(&self, m: Vec3) -> f32 {
-        if m.z <= 0.0 {
-            return 0.0;
-        }
-        let a2 = self.alpha * self.alpha;
-        let t = a2 * m.z * m.z + m.x * m.x + m.y * m.y;
-        a2 / (PI * t * t)
-    }
-
-    /// Smith's `Lambda(w)`, side-independent, in a form without cancellation
-    /// at small `alpha^2 tan^2`.
-    fn lambda(&self, w: Vec3) -> f32 {
-        let x = self.alpha * self.alpha * (w.x * w.x + w.y * w.y) / (w.z * w.z);
-        if !x.is_finite() {
-            return f32::INFINITY;
-        }
-        0.5 * x / ((1.0 + x).sqrt() + 1.0)
-    }
-
-    fn g1(&self, w: Vec3) -> f32 {
-        1.0 / (1.0 + self.lambda(w))
-    }
-
-    fn g(&self, wi: Vec3, wo: Vec3) -> f32 {
-        1.0 / (1.0 + self.lambda(wi) + self.lambda(wo))
-    }
-
-    /// The density of visible normals `D_wi(m) = G1(wi) D(m) |wi.m| / |c_i|`
-    /// (0 for a normal facing away from `wi`).
-    fn d_visible(&self, wi: Vec3, m: Vec3) -> f32 {
-        let im = wi.dot(m);
-        if im * wi.z <= 0.0 {
-            return 0.0;
-        }
-        self.g1(wi) * self.d(m) * im.abs() / wi.z.abs()
-    }
-
-    /// A microfacet normal from [`Self::d_visible`] (pbrt-v4 `Sample_wm`,
-    /// isotropic): a uniform disk point warped onto the projected visible
-    /// hemisphere of the stretched `wi` (of `-wi` from inside).
-    fn sample_m(&self, wi: Vec3, u: [f32; 2]) -> Vec3 {
-        let a = self.alpha;
-        let mut wh = Vec3::new(a * wi.x, a * wi.y, wi.z).normalize();
-        if wh.z < 0.0 {
-            wh = -wh;
-        }
-        let t1 = if wh.z < 0.99999 {
-            Vec3::Z.cross(wh).normalize()
-        } else {
-            Vec3::X
-        };
-        let t2 = wh.cross(t1);
-        let r = u[0].sqrt();
-        let phi = 2.0 * PI * u[1];
-        let (px, py) = (r * phi.cos(), r * phi.sin());
-        let h = (1.0 - px * px).max(0.0).sqrt();
-        let s = 0.5 * (1.0 + wh.z);
-        let py = (1.0 - s) * h + s * py;
-        let pz = (1.0 - px * px - py * py).max(0.0).sqrt();
-        let nh = px * t1 + py * t2 + pz * wh;
-        Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-6)).normalize()
-    }
-
     /// The reflectance that picks reflection at normal `m`: F(wi.m), or the
     /// slab's R'(|wi.m|) when thin.
     fn reflectance(&self, wi_m: f32) -> f32 {
@@ -273,8 +207,8 @@ impl RoughDielectric {
         } else {
             (r, Vec3::ONE)
         };
-        let lobe = self.d(m) * self.g(wi, wr) / (4.0 * (wi.z * wr.z).abs());
-        let pdf = self.d_visible(wi, m) / (4.0 * im.abs()) * p;
+        let lobe = self.ggx.d(m) * self.ggx.g(wi, wr) / (4.0 * (wi.z * wr.z).abs());
+        let pdf = self.ggx.d_visible(wi, m) / (4.0 * im.abs()) * p;
         (colour * (lobe * p), pdf)
     }
 
@@ -294,8 +228,9 @@ impl RoughDielectric {
         // `1 - sin^2` in `fresnel_dielectric` loses digits.
         let t_f = 1.0 - fresnel_pair(im.abs(), om.abs(), eta_i, eta_o);
         let t_pdf = 1.0 - fresnel_dielectric(im, self.ior);
-        let f = self.d(m) * self.g(wi, wo) * t_f * im.abs() * jacobian / (wi.z * wo.z).abs();
-        let pdf = self.d_visible(wi, m) * jacobian * t_pdf;
+        let f =
+            self.ggx.d(m) * self.ggx.g(wi, wo) * t_f * im.abs() * jacobian / (wi.z * wo.z).abs();
+        let pdf = self.ggx.d_visible(wi, m) * jacobian * t_pdf;
         (self.tint * (f * radiance_scale(wi.z, self.ior, mode)), pdf)
     }
 
@@ -368,7 +303,7 @@ impl RoughDielectric {
                 specular: true,
             });
         }
-        let m = self.sample_m(wi, u);
+        let m = self.ggx.sample_m(wi, u);
         let im = wi.dot(m);
         if im * wi.z <= 0.0 {
             return None;
@@ -433,7 +368,7 @@ impl RoughDielectric {
             let (u0, w) = ((1.0 - s * s * s) as f32, 3.0 * s * s);
             total += w;
             for b in 0..N {
-                let m = self.sample_m(wi, [u0, (b as f32 + 0.5) / N as f32]);
+                let m = self.ggx.sample_m(wi, [u0, (b as f32 + 0.5) / N as f32]);
                 let im = wi.dot(m);
                 if im * wi.z <= 0.0 {
                     continue;
@@ -441,7 +376,7 @@ impl RoughDielectric {
                 let r = self.reflectance(im) as f64;
                 let wr = (2.0 * im * m - wi).normalize();
                 if wr.z * wi.z > 0.0 {
-                    let g = self.g(wi, wr) as f64;
+                    let g = self.ggx.g(wi, wr) as f64;
                     refl += w * r * g;
                     if self.thin {
                         trans += w * (1.0 - r) * g;
@@ -450,7 +385,7 @@ impl RoughDielectric {
                 if !self.thin && r < 1.0 {
                     if let Some(wt) = refract(wi, m, self.ior) {
                         if wt.z * wi.z < 0.0 {
-                            trans += w * (1.0 - r) * self.g(wi, wt) as f64;
+                            trans += w * (1.0 - r) * self.ggx.g(wi, wt) as f64;
                         }
                     }
                 }
@@ -458,7 +393,7 @@ impl RoughDielectric {
         }
         // Divided by the weights' own sum (not N), so a constant integrand
         // comes out exact.
-        let n = total * N as f64 * self.g1(wi) as f64;
+        let n = total * N as f64 * self.ggx.g1(wi) as f64;
         let (refl, trans) = ((refl / n) as f32, (trans / n) as f32);
         (Vec3::splat(refl) + trans * self.tint).min(Vec3::ONE)
     }
@@ -467,48 +402,6 @@ impl RoughDielectric {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn ggx_is_normalised() {
-        // integral D(m) cos theta_m dm = 1 on a (cos, phi) midpoint grid.
-        for alpha in [0.05f32, 0.3, 1.0] {
-            let b = RoughDielectric::new(alpha, 1.5, Vec3::ONE, Vec3::ZERO, false).unwrap();
-            let n = 20_000;
-            let mut s = 0.0f64;
-            for k in 0..n {
-                let c = (k as f32 + 0.5) / n as f32;
-                let m = crate::sampling::spherical_direction(c, 0.0);
-                s += (b.d(m) * c) as f64 * 2.0 * std::f64::consts::PI / n as f64;
-            }
-            assert!((s - 1.0).abs() < 2e-3, "alpha={alpha}: {s}");
-        }
-    }
-
-    #[test]
-    fn visible_normals_are_normalised() {
-        // integral D_wi(m) dm = 1 (Heitz 2014's constraint on G1).
-        for alpha in [0.1f32, 0.5, 1.0] {
-            let b = RoughDielectric::new(alpha, 1.5, Vec3::ONE, Vec3::ZERO, false).unwrap();
-            for wi in [
-                Vec3::new(0.6, 0.0, 0.8),
-                Vec3::new(-0.3, 0.4, -0.866).normalize(),
-                Vec3::new(0.995, 0.0, 0.0999).normalize(),
-            ] {
-                let (nc, np) = (2000, 256);
-                let mut s = 0.0f64;
-                for i in 0..nc {
-                    for j in 0..np {
-                        let c = (i as f32 + 0.5) / nc as f32;
-                        let phi = (j as f32 + 0.5) / np as f32 * 2.0 * PI;
-                        let m = crate::sampling::spherical_direction(c, phi);
-                        s += b.d_visible(wi, m) as f64;
-                    }
-                }
-                s *= 2.0 * std::f64::consts::PI / (nc * np) as f64;
-                assert!((s - 1.0).abs() < 5e-3, "alpha={alpha} wi={wi}: {s}");
-            }
-        }
-    }
 
     #[test]
     fn third_uniform_is_in_range() {

@@ -10,7 +10,7 @@
 use adaptive_pm::analysis::{
     analyze_brdf, analyze_brdf_at, analyze_emitter, AnalysisParams, Estimator,
 };
-use adaptive_pm::brdf::{Brdf, CookTorrance, Lambert, Mirror, Phong};
+use adaptive_pm::brdf::{Brdf, CookTorrance, GltfPbr, Lambert, Mirror, Phong};
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::scene::{Light, Scene};
 use anyhow::{bail, Context};
@@ -31,6 +31,10 @@ pub struct AnalyzeArgs {
     /// Cook–Torrance metals (f0 0.9) to analyse, by Beckmann roughness.
     #[arg(long = "cook-torrance", value_delimiter = ',')]
     pub cook_torrance: Vec<f32>,
+    /// glTF metallic-roughness metals (base colour 0.9, GGX) to analyse, by
+    /// glTF roughness (alpha = roughness^2).
+    #[arg(long = "gltf-metal", value_delimiter = ',')]
+    pub gltf_metal: Vec<f32>,
     /// Analyse a Lambert BRDF.
     #[arg(long)]
     pub lambert: bool,
@@ -139,6 +143,7 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
     checked("cosn", &args.cosn)?;
     checked("phong", &args.phong)?;
     checked("cook-torrance", &args.cook_torrance)?;
+    checked("gltf-metal", &args.gltf_metal)?;
     let p = AnalysisParams::default();
     let mut rows = Vec::new();
     if let Some(name) = &args.scene {
@@ -154,6 +159,10 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
     for &m in &args.cook_torrance {
         let b = CookTorrance::new(m, Vec3::splat(0.9), Vec3::ZERO).context("--cook-torrance")?;
         rows.push(brdf_row("cook-torrance", Some(m), b.into(), est, &p)?);
+    }
+    for &r in &args.gltf_metal {
+        let b = GltfPbr::new(Vec3::splat(0.9), 1.0, r * r, 0.04).context("--gltf-metal")?;
+        rows.push(brdf_row("gltf-pbr", Some(r), b.into(), est, &p)?);
     }
     if args.lambert {
         rows.push(brdf_row(
@@ -175,7 +184,7 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
     }
     if rows.is_empty() {
         bail!(
-            "nothing to analyse: give a scene or --cosn/--phong/--cook-torrance/--lambert/--mirror"
+            "nothing to analyse: give a scene or --cosn/--phong/--cook-torrance/--gltf-metal/--lambert/--mirror"
         );
     }
     if args.json {

@@ -8,7 +8,9 @@
 //! takes, and how large the largest step up is, depend on the seed: over 16
 //! seeds the largest step up over cos^n, n = 0..1000, is 1.57 % to 1.76 %
 //! (mean 1.68 %), over the Phong exponents 0.34 % to 3.53 % (mean 1.65 %),
-//! over the Cook–Torrance roughnesses 0 to 0.65 % (mean 0.04 %)
+//! over the Cook–Torrance roughnesses 0 to 0.65 % (mean 0.04 %), over
+//! glTF's GGX dielectric 0.71 % to 0.85 % and its GGX metal 0 to 11.4 %
+//! (mean 5.15 %: held to its own slack, [`GLTF_METAL_SLACK`])
 //! (`analysis_monotone::step_ups_over_16_seeds`, ignored: 20 s of CPU;
 //! `--ignored --nocapture` prints each seed's step). So the claim tested is
 //! about that largest step up as a random quantity: its mean over seeds is
@@ -18,7 +20,7 @@
 //! 10 %, 48 % on Phong; i.i.d. samples: 10 %).
 
 use adaptive_pm::analysis::{analyze_brdf_at, analyze_emitter, AnalysisParams, Estimator};
-use adaptive_pm::brdf::{Brdf, CookTorrance, Phong};
+use adaptive_pm::brdf::{Brdf, CookTorrance, GltfPbr, Phong};
 use adaptive_pm::emitter::CosN;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -27,6 +29,12 @@ use crate::common;
 
 /// The mean over seeds of the largest relative step up that the tests allow.
 const SLACK: f64 = 0.02;
+/// The same for glTF's GGX metal, whose long-tailed lobe the estimator
+/// resolves less steadily: over 16 seeds its largest step up is 0 to 11.4 %
+/// (mean 5.15 %, standard error 0.81 %), always between roughness 0.27 and
+/// 0.52, where `alpha_D` falls from 0.2 to 0.09 (`step_ups_over_16_seeds`).
+/// A known weakness of the estimator on GGX, not a claim that it is fine.
+const GLTF_METAL_SLACK: f64 = 0.08;
 
 fn params(s: u64) -> AnalysisParams {
     AnalysisParams {
@@ -63,6 +71,11 @@ fn largest_step_up(alphas: &[f32]) -> (f64, usize) {
 /// an excess counts). When every seed has the same largest step (none, for
 /// instance) there is no noise and it must not exceed the slack.
 fn assert_steps_small(what: &str, xs: &[f32], curves: &[Vec<f32>]) {
+    assert_steps_below(what, xs, curves, SLACK);
+}
+
+/// [`assert_steps_small`] with its own slack.
+fn assert_steps_below(what: &str, xs: &[f32], curves: &[Vec<f32>], slack: f64) {
     let steps: Vec<(f64, usize)> = curves.iter().map(|a| largest_step_up(a)).collect();
     for (s, &(m, i)) in steps.iter().enumerate() {
         eprintln!(
@@ -74,14 +87,14 @@ fn assert_steps_small(what: &str, xs: &[f32], curves: &[Vec<f32>]) {
     let m = common::MeanVar::of(steps.iter().map(|s| s.0));
     let check = format!("{what} mean largest step up");
     if m.variance() == 0.0 {
-        assert!(m.mean() <= SLACK, "{check}: {} at every seed", m.mean());
+        assert!(m.mean() <= slack, "{check}: {} at every seed", m.mean());
     } else {
         eprintln!(
             "{check}: {:.2} % +- {:.2} %",
             100.0 * m.mean(),
             100.0 * m.std_error()
         );
-        common::assert_sigmas(&check, (m.mean() - SLACK).max(0.0), m.std_error(), 4.0);
+        common::assert_sigmas(&check, (m.mean() - slack).max(0.0), m.std_error(), 4.0);
     }
 }
 
@@ -124,6 +137,37 @@ fn cook_torrance_curves(seeds: u64) -> (Vec<f32>, Vec<Vec<f32>>) {
             .alpha_d
     });
     (ms, a)
+}
+
+/// glTF's BRDF at normal incidence, from the roughest (glTF roughness 1) to
+/// the smoothest accepted (`alpha` = [`GltfPbr::MIN_ALPHA`]): a metal (base
+/// 0.9) and a dielectric (base 0.5, the diffuse base under the lobe).
+fn gltf_curves(seeds: u64, metallic: f32) -> (Vec<f32>, Vec<Vec<f32>>) {
+    let r_min = GltfPbr::MIN_ALPHA.sqrt();
+    let rs: Vec<f32> = (0..=80)
+        .map(|i| 1.0 - (1.0 - r_min) * i as f32 / 80.0)
+        .collect();
+    let base = Vec3::splat(if metallic == 1.0 { 0.9 } else { 0.5 });
+    let a = curves(seeds, &rs, |r, p| {
+        let b: Brdf = GltfPbr::new(base, metallic, (r * r).max(GltfPbr::MIN_ALPHA), 0.04)
+            .unwrap()
+            .into();
+        analyze_brdf_at(&b, 1.0, Estimator::Paper, p)
+            .unwrap()
+            .alpha_d
+    });
+    (rs, a)
+}
+
+#[test]
+fn gltf_rougher_is_never_smaller() {
+    // 4 seeds. The dielectric's diffuse base steadies its estimate (its
+    // largest step up is 0.71 % to 0.85 % over 16 seeds); the metal is held
+    // to its own, measured slack.
+    let (rs, a) = gltf_curves(4, 0.0);
+    assert_steps_small("glTF dielectric", &rs, &a);
+    let (rs, a) = gltf_curves(4, 1.0);
+    assert_steps_below("glTF metal", &rs, &a, GLTF_METAL_SLACK);
 }
 
 #[test]
@@ -170,4 +214,8 @@ fn step_ups_over_16_seeds() {
     assert_steps_small("Phong", &es, &a);
     let (ms, a) = cook_torrance_curves(16);
     assert_steps_small("Cook-Torrance", &ms, &a);
+    let (rs, a) = gltf_curves(16, 0.0);
+    assert_steps_small("glTF dielectric", &rs, &a);
+    let (rs, a) = gltf_curves(16, 1.0);
+    assert_steps_below("glTF metal", &rs, &a, GLTF_METAL_SLACK);
 }

@@ -7,7 +7,7 @@
 //! extremes are checked on every sample (exact up to f32 rounding), so their
 //! fixed seeds only pick the inputs.
 
-use adaptive_pm::brdf::{from_gltf_pbr, Brdf, CookTorrance, Lambert, Mirror, Phong};
+use adaptive_pm::brdf::{from_gltf_pbr, Brdf, CookTorrance, GltfPbr, Lambert, Mirror, Phong};
 use adaptive_pm::rng::Rng;
 use adaptive_pm::sampling::{phi_of, spherical_direction};
 use glam::Vec3;
@@ -59,7 +59,25 @@ fn glossy_models() -> Vec<(&'static str, Brdf)> {
             "gltf",
             from_gltf_pbr(Vec3::new(0.9, 0.6, 0.3), 0.5, 0.6).unwrap(),
         ),
+        (
+            "gltf dielectric r=0.3",
+            GltfPbr::new(Vec3::splat(0.8), 0.0, 0.09, 0.04)
+                .unwrap()
+                .into(),
+        ),
+        (
+            "gltf metal r=0.4",
+            GltfPbr::new(Vec3::new(0.95, 0.64, 0.54), 1.0, 0.16, 0.04)
+                .unwrap()
+                .into(),
+        ),
     ]
+}
+
+fn gltf(base: f32, metallic: f32, roughness: f32, f0_d: f32) -> Brdf {
+    GltfPbr::new(Vec3::splat(base), metallic, roughness * roughness, f0_d)
+        .unwrap()
+        .into()
 }
 
 /// Standard normal upper quantile at p = 1e-5: a chi-square statistic whose
@@ -253,6 +271,13 @@ fn energy_is_conserved_and_albedo_matches_monte_carlo() {
                 .unwrap()
                 .into(),
         ),
+        ("gltf white metal r=.05", gltf(1.0, 1.0, 0.05, 0.04)),
+        ("gltf white metal r=1", gltf(1.0, 1.0, 1.0, 0.04)),
+        ("gltf white dielectric r=.1", gltf(1.0, 0.0, 0.1, 0.04)),
+        ("gltf white dielectric r=.5", gltf(1.0, 0.0, 0.5, 0.04)),
+        ("gltf white dielectric r=1", gltf(1.0, 0.0, 1.0, 0.04)),
+        ("gltf white ior 2.4 r=.3", gltf(1.0, 0.0, 0.3, 0.17)),
+        ("gltf white half-metal r=.2", gltf(1.0, 0.5, 0.2, 0.04)),
     ];
     for (name, b) in worst {
         for (k, cos) in [1.0f32, 0.8, 0.5, 0.2, 0.05, 0.01].into_iter().enumerate() {
@@ -346,6 +371,11 @@ fn extremes_stay_finite() {
             .into(),
         Lambert::new(Vec3::ZERO).unwrap().into(),
         Phong::new(Vec3::ZERO, Vec3::ZERO, 10.0).unwrap().into(),
+        GltfPbr::new(Vec3::ONE, 0.0, GltfPbr::MIN_ALPHA, 0.04)
+            .unwrap()
+            .into(),
+        GltfPbr::new(Vec3::ONE, 1.0, 1.0, 1.0).unwrap().into(),
+        GltfPbr::new(Vec3::ZERO, 0.0, 1.0, 0.0).unwrap().into(),
     ];
     let mut r = Rng::new(11);
     for b in models {
@@ -386,6 +416,11 @@ fn bad_parameters_are_errors() {
     assert!(CookTorrance::new(0.3, Vec3::splat(nan), Vec3::ZERO).is_err());
     assert!(Mirror::new(Vec3::splat(-0.1)).is_err());
     assert!(from_gltf_pbr(Vec3::ONE, -0.5, 0.5).is_err());
+    assert!(GltfPbr::new(Vec3::ONE, 0.5, 1e-4, 0.04).is_err());
+    assert!(GltfPbr::new(Vec3::ONE, 0.5, nan, 0.04).is_err());
+    assert!(GltfPbr::new(Vec3::ONE, 1.5, 0.5, 0.04).is_err());
+    assert!(GltfPbr::new(Vec3::ONE, 0.5, 0.5, -0.1).is_err());
+    assert!(GltfPbr::new(Vec3::splat(nan), 0.5, 0.5, 0.04).is_err());
 }
 
 #[test]

@@ -166,7 +166,7 @@ fn transmission_ior_and_volume_are_read() {
     assert_eq!(d.attenuation(), Vec3::ZERO);
 
     // The IOR of an opaque dielectric sets its Fresnel f0: ((2-1)/(2+1))^2.
-    let Brdf::CookTorrance(c) = probe(ROUGH, r#"{"KHR_materials_ior":{"ior":2}}"#) else {
+    let Brdf::GltfPbr(c) = probe(ROUGH, r#"{"KHR_materials_ior":{"ior":2}}"#) else {
         panic!("an opaque dielectric")
     };
     assert!((c.f0() - Vec3::splat(1.0 / 9.0)).abs().max_element() < 1e-6);
