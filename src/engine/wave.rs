@@ -146,10 +146,12 @@ fn shade_hit<C>(
     out.hits += 1;
     let position = p.origin + p.direction * h.t;
     let material = h.material as usize;
-    // Checked by `Hit::check`; `get` keeps a missed case a stop, not a panic.
-    let Some(brdf) = ctx.scene.materials.get(material).map(|m| &m.brdf) else {
+    // Checked by `Hit::check`; `None` keeps a missed case a stop, not a
+    // panic. A textured material scatters by its texels at this point.
+    let Some(brdf) = ctx.scene.surface_brdf(h) else {
         return;
     };
+    let brdf = &brdf;
     let from_inside = h.ng.dot(p.direction) > 0.0;
     let mut power = p.power;
     if from_inside {

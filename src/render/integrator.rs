@@ -76,7 +76,7 @@ impl SampleScratch {
 }
 
 /// A non-delta hit reached through zero or more mirrors.
-struct SurfaceHit<'a> {
+struct SurfaceHit {
     position: Vec3,
     /// Geometric normal flipped to the side the ray came from.
     normal: Vec3,
@@ -85,8 +85,9 @@ struct SurfaceHit<'a> {
     shading: Vec3,
     /// Unit direction back along the ray.
     wo: Vec3,
-    material: &'a Material,
     material_index: usize,
+    /// The BRDF at this point (a textured material's, from its texels).
+    brdf: Brdf,
     /// Product of the mirror weights on the way.
     throughput: Vec3,
 }
@@ -126,7 +127,7 @@ impl<'a> Ctx<'a> {
         first_emission: u32,
         rng: &mut Rng,
         emitted: &mut Vec3,
-    ) -> Option<SurfaceHit<'a>> {
+    ) -> Option<SurfaceHit> {
         let mut throughput = Vec3::ONE;
         for bounce in 0..=MAX_SPECULAR {
             let h = self.rt.intersect(&ray)?;
@@ -151,8 +152,8 @@ impl<'a> Ctx<'a> {
                     normal,
                     shading: self.shading_normal(&h, normal, wo),
                     wo,
-                    material,
                     material_index: h.material as usize,
+                    brdf: self.scene.surface_brdf(&h)?,
                     throughput,
                 });
             }
@@ -194,7 +195,7 @@ impl<'a> Ctx<'a> {
         let t = sc.start_lookup();
         let v = radiance_estimate(
             map,
-            &s.material.brdf,
+            &s.brdf,
             s.position,
             s.normal,
             s.wo,
@@ -225,7 +226,7 @@ impl<'a> Ctx<'a> {
             sc.end_lookup(t);
             if let Some(e) = e {
                 sc.hits += 1;
-                let albedo = match &y.material.brdf {
+                let albedo = match &y.brdf {
                     Brdf::Lambert(l) => l.albedo,
                     _ => self.albedo[y.material_index].at(y.wo.dot(y.shading)),
                 };
@@ -252,7 +253,7 @@ impl<'a> Ctx<'a> {
         let n = self.spp * self.gather;
         for j in 0..self.gather {
             let u = px.get_2d(dim::GATHER, sample * self.gather + j, n);
-            let Some(bs) = s.material.brdf.sample(wo_l, u) else {
+            let Some(bs) = s.brdf.sample(wo_l, u) else {
                 continue;
             };
             let dir = frame.world_from_local(bs.wo);
@@ -277,7 +278,7 @@ impl<'a> Ctx<'a> {
         for j in 0..l {
             let u = px.get_2d(dim::LIGHT, sample * l + j, self.spp * l);
             sum += self.lights.sample(
-                &s.material.brdf,
+                &s.brdf,
                 [s.position, s.normal, s.shading, s.wo],
                 self.eps,
                 u,

@@ -249,6 +249,10 @@ impl<'a> PathTracer<'a> {
                 ray = Ray::new(pos + side * self.eps, out);
                 continue;
             }
+            // A textured material scatters by its texels at this point.
+            let Some(brdf) = self.scene.surface_brdf(&h) else {
+                break;
+            };
             let frame = Frame::from_normal(normal);
             let wo_l = frame.local_from_world(wo);
             st.non_delta += 1;
@@ -262,9 +266,9 @@ impl<'a> PathTracer<'a> {
                 Class::Indirect
             };
             if part.counts(nee_class, show_emitters) {
-                l += beta * next_event(self, &mat.brdf, [pos, normal, wo], rng);
+                l += beta * next_event(self, &brdf, [pos, normal, wo], rng);
             }
-            let Some(bs) = mat.brdf.sample(wo_l, rng.next_2d()) else {
+            let Some(bs) = brdf.sample(wo_l, rng.next_2d()) else {
                 break;
             };
             beta *= bs.weight;

@@ -30,8 +30,8 @@ fn shown(uri: &str) -> String {
     format!("`{}`", s.escape_debug())
 }
 
-fn refuse(i: usize, uri: &str, why: &str) -> Error {
-    Error::InvalidScene(format!("buffer {i} uri {}: {why}", shown(uri)))
+fn refuse_resource(what: &str, uri: &str, why: &str) -> Error {
+    Error::InvalidScene(format!("{what} uri {}: {why}", shown(uri)))
 }
 
 /// Loads every buffer of `root`; `blob` is the GLB binary chunk, `base` the
@@ -60,8 +60,8 @@ pub(super) fn load_buffers(
                     "buffer {i} has no uri and there is no GLB binary chunk"
                 ))
             })?,
-            Some(uri) if uri.starts_with("data:") => decode_data_uri(i, uri)?,
-            Some(uri) => read_file(i, uri, want, base)?,
+            Some(uri) if uri.starts_with("data:") => decode_data_uri(&format!("buffer {i}"), uri)?,
+            Some(uri) => read_file(&format!("buffer {i}"), uri, Bytes::AtLeast(want), base)?,
         };
         if (data.len() as u64) < want {
             return Err(Error::InvalidScene(format!(
@@ -73,11 +73,48 @@ pub(super) fn load_buffers(
     Ok(out)
 }
 
-fn decode_data_uri(i: usize, uri: &str) -> Result<Vec<u8>> {
-    let Some((_, payload)) = uri.split_once(";base64,") else {
-        return Err(refuse(i, uri, "only base64 data URIs are supported"));
+/// Reads another resource a glTF file names by URI (an image): a `data:`
+/// URI, or a file inside `base` under the same rules as buffers, of at most
+/// `max_bytes`. `what` names it in errors (`image 2`).
+pub(super) fn read_resource(
+    what: &str,
+    uri: &str,
+    max_bytes: u64,
+    base: Option<&Path>,
+) -> Result<Vec<u8>> {
+    let data = if uri.starts_with("data:") {
+        decode_data_uri(what, uri)?
+    } else {
+        read_file(what, uri, Bytes::AtMost(max_bytes), base)?
     };
-    base64::decode(payload).map_err(|_| refuse(i, uri, "invalid base64"))
+    if data.len() as u64 > max_bytes {
+        return Err(refuse_resource(
+            what,
+            uri,
+            "larger than the limit for one resource",
+        ));
+    }
+    Ok(data)
+}
+
+/// How many bytes a file read takes.
+#[derive(Clone, Copy)]
+enum Bytes {
+    /// A buffer's `byteLength`: the file must hold that many; no more is read.
+    AtLeast(u64),
+    /// A whole file of at most this many bytes.
+    AtMost(u64),
+}
+
+fn decode_data_uri(what: &str, uri: &str) -> Result<Vec<u8>> {
+    let Some((_, payload)) = uri.split_once(";base64,") else {
+        return Err(refuse_resource(
+            what,
+            uri,
+            "only base64 data URIs are supported",
+        ));
+    };
+    base64::decode(payload).map_err(|_| refuse_resource(what, uri, "invalid base64"))
 }
 
 /// Percent-decodes a URI path; `None` on a malformed escape, a NUL or bad UTF-8.
@@ -144,38 +181,38 @@ pub fn resolve_inside(uri: &str, base: &Path) -> std::result::Result<PathBuf, &'
     Ok(out)
 }
 
-fn read_file(i: usize, uri: &str, want: u64, base: Option<&Path>) -> Result<Vec<u8>> {
-    let base = base.ok_or_else(|| refuse(i, uri, "external files need a scene file's folder"))?;
-    let path = resolve_inside(uri, base).map_err(|why| refuse(i, uri, why))?;
-    let not_found = || refuse(i, uri, "cannot be opened");
+fn read_file(what: &str, uri: &str, bytes: Bytes, base: Option<&Path>) -> Result<Vec<u8>> {
+    let refuse = |why: &str| refuse_resource(what, uri, why);
+    let base = base.ok_or_else(|| refuse("external files need a scene file's folder"))?;
+    let path = resolve_inside(uri, base).map_err(refuse)?;
+    let not_found = || refuse("cannot be opened");
     // Symbolic links may point anywhere: the resolved file must still be inside.
     let real = path.canonicalize().map_err(|_| not_found())?;
     let real_base = base.canonicalize().map_err(|_| not_found())?;
     if !real.starts_with(&real_base) {
-        return Err(refuse(
-            i,
-            uri,
-            "it resolves outside the scene file's folder",
-        ));
+        return Err(refuse("it resolves outside the scene file's folder"));
     }
     // The error names the URI, never the resolved path.
     let (file, meta) = crate::input::open_regular_file(&real).map_err(|e| {
         if crate::input::is_not_regular(&e) {
-            refuse(i, uri, "not a regular file")
+            refuse("not a regular file")
         } else {
             not_found()
         }
     })?;
-    if meta.len() < want {
-        return Err(refuse(
-            i,
-            uri,
-            "the file is shorter than the buffer's byteLength",
-        ));
-    }
-    let mut data = Vec::with_capacity(want as usize);
-    file.take(want)
+    let take = match bytes {
+        Bytes::AtLeast(want) if meta.len() < want => {
+            return Err(refuse("the file is shorter than the buffer's byteLength"));
+        }
+        Bytes::AtMost(max) if meta.len() > max => {
+            return Err(refuse("larger than the limit for one resource"));
+        }
+        Bytes::AtLeast(n) => n,
+        Bytes::AtMost(_) => meta.len(),
+    };
+    let mut data = Vec::with_capacity(take as usize);
+    file.take(take)
         .read_to_end(&mut data)
-        .map_err(|_| refuse(i, uri, "read failed"))?;
+        .map_err(|_| refuse("read failed"))?;
     Ok(data)
 }

@@ -68,8 +68,9 @@ pub(super) fn multiplicity(t: Type) -> u64 {
     }
 }
 
-/// The extensions a file may require: the five the loader reads, and the
-/// texture ones (textures are ignored, so whatever they change is too).
+/// The extensions a file may require: the six the loader reads, and two
+/// texture formats, whose textures (with no PNG or JPEG `source`) cannot be
+/// part of a valid file the loader accepts anyway.
 const SUPPORTED_REQUIRED: [&str; 8] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
@@ -168,7 +169,7 @@ pub(super) fn check_document(root: &Root) -> Result<()> {
             index_ok(&label("scene", i, s.name.as_deref()), n, root.nodes.len())?;
         }
     }
-    Ok(())
+    super::gltf_textures::check_json(root)
 }
 
 fn check_mesh(root: &Root, i: usize, m: &json::Mesh) -> Result<()> {

@@ -74,8 +74,15 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
 
     let mut scene = Scene::new();
     let mut material_ids = Vec::with_capacity(doc.materials().len());
+    let mut textures = super::gltf_textures::TextureLoader::new(&buffers, base);
     for m in doc.materials() {
-        material_ids.push(scene.add_material(convert_material(&m)?));
+        let (material, factors) = convert_material(&m)?;
+        let specular = material.brdf.is_specular();
+        let id = scene.add_material(material);
+        if let Some(maps) = textures.maps_of(&m, factors, specular, &mut scene)? {
+            scene.set_material_maps(id, maps)?;
+        }
+        material_ids.push(id);
     }
     let mut default_material = None;
 
@@ -177,6 +184,8 @@ fn load_node(
             if let Some(n) = normals {
                 scene.set_vertex_normals(index, n)?;
             }
+            let prim_label = format!("{mesh_label} primitive {pi}");
+            super::gltf_textures::load_texcoords(scene, index, &reader, &prim_label)?;
         }
     }
     if let Some(light) = node.light() {
@@ -210,7 +219,8 @@ fn spec_default_material() -> Result<Material> {
     })
 }
 
-fn convert_material(m: &gltf::Material) -> Result<Material> {
+/// The material and the glTF factors it was mapped from.
+fn convert_material(m: &gltf::Material) -> Result<(Material, GltfMaterial)> {
     let label = match m.index() {
         Some(i) => super::gltf_checks::label("material", i, m.name()),
         None => "the default material".to_string(),
@@ -249,11 +259,12 @@ fn convert_material(m: &gltf::Material) -> Result<Material> {
     } else {
         None
     };
-    Ok(Material {
+    let material = Material {
         name: m.name().unwrap_or("unnamed").to_string(),
         brdf,
         emission,
-    })
+    };
+    Ok((material, input))
 }
 
 /// `extras.cosn` of a material, 0 when absent.

@@ -311,6 +311,7 @@ mod tests {
             indices,
             material: 0,
             normals: Vec::new(),
+            texcoords: Vec::new(),
         }
     }
 

@@ -19,24 +19,34 @@ mod gltf_data;
 #[cfg(feature = "gltf")]
 mod gltf_graph;
 #[cfg(feature = "gltf")]
+mod gltf_images;
+#[cfg(feature = "gltf")]
 mod gltf_load;
+#[cfg(feature = "gltf")]
+mod gltf_textures;
 mod light;
 mod prepared;
 mod surface;
+pub mod texture;
+mod textured;
 
 #[cfg(feature = "gltf")]
 pub use buffers::{percent_decode, resolve_inside, MAX_BUFFER_BYTES};
 pub use checks::{MAX_COORDINATE, MAX_LIGHT_POWER, MAX_RADIANCE, MIN_LIGHT_POWER};
+#[cfg(feature = "gltf")]
+pub use gltf_images::MAX_TEXELS;
 
 pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
 pub use prepared::PreparedScene;
 pub use surface::{consistent_with_geometry, SurfacePoint, SurfaceSampler};
+pub use texture::{Encoding, Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
+pub use textured::{flat_base_color, MaterialMaps};
 
 use crate::brdf::Brdf;
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use crate::sampling::luminance;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 #[cfg(feature = "gltf")]
 use std::path::Path;
 
@@ -153,6 +163,9 @@ pub struct Mesh {
     /// Per-vertex shading normals (unit, world space), or empty for flat
     /// shading ([`Scene::set_vertex_normals`]).
     pub normals: Vec<Vec3>,
+    /// Per-vertex texture coordinates by set (`texcoords[n]` is glTF's
+    /// `TEXCOORD_n`; empty when absent; [`Scene::set_texcoords`]).
+    pub texcoords: Vec<Vec<Vec2>>,
 }
 
 impl Mesh {
@@ -276,6 +289,10 @@ pub struct Scene {
     pub(crate) source_triangles: Vec<Option<Vec<u32>>>,
     /// What the loader skipped or changed without refusing the file.
     pub(crate) warnings: Vec<String>,
+    /// Textures; [`MaterialMaps`] refer to them by index.
+    pub(crate) textures: Vec<Texture>,
+    /// Per material, its textures (`None`, or past the end: untextured).
+    pub(crate) material_maps: Vec<Option<MaterialMaps>>,
 }
 
 /// Area of a triangle.
@@ -393,6 +410,7 @@ impl Scene {
             indices,
             material,
             normals: Vec::new(),
+            texcoords: Vec::new(),
         };
         let light = match emission {
             Some(e) => Some(checks::area_light(&mesh, self.meshes.len(), e)?),
@@ -582,6 +600,7 @@ impl Scene {
         if self.triangle_count() == 0 {
             return Err(Error::InvalidScene("the scene has no triangle".into()));
         }
+        self.check_texcoords()?;
         // In f64: forty lights of 1e37 W each summed to infinity in f32.
         let total = self.lights.iter().fold([0.0f64; 3], |mut t, l| {
             let p = l.power();
@@ -644,6 +663,7 @@ mod area_tests {
             indices,
             material: 0,
             normals: Vec::new(),
+            texcoords: Vec::new(),
         };
         assert!((mesh.area() - 100.0).abs() < 1e-3, "{}", mesh.area());
     }

@@ -1,0 +1,324 @@
+//! A glTF material's textures: which are read ([`super::textured`]: base
+//! colour and metallic-roughness, on opaque materials), the images decoded
+//! once per texture, and the texture coordinates of the meshes that use
+//! them. What is not modelled is named in the scene's warnings instead of
+//! being dropped silently: emissive and normal textures, `alphaMode` MASK
+//! and BLEND, and the textures of mirrors and glass.
+//!
+//! Images come from a `bufferView` (a GLB's usual form) or a `data:` URI.
+//! Image files beside the scene (`uri: "wood.png"`) are read like buffers:
+//! only inside the scene's folder (see [`super::buffers`]).
+
+use super::gltf_images::{decode, MAX_TEXELS};
+use super::texture::{Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
+use super::textured::MaterialMaps;
+use super::Scene;
+use crate::brdf::GltfMaterial;
+use crate::error::{Error, Result};
+use glam::Vec2;
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Loads each texture once, the first time a material reads it.
+pub(super) struct TextureLoader<'a> {
+    buffers: &'a [Vec<u8>],
+    base: Option<&'a Path>,
+    /// glTF texture index -> scene texture index.
+    loaded: HashMap<usize, usize>,
+    /// Texels the scene's textures may still take.
+    budget: u64,
+}
+
+fn wrap_of(w: gltf::texture::WrappingMode) -> Wrap {
+    use gltf::texture::WrappingMode as W;
+    match w {
+        W::Repeat => Wrap::Repeat,
+        W::ClampToEdge => Wrap::ClampToEdge,
+        W::MirroredRepeat => Wrap::MirroredRepeat,
+    }
+}
+
+fn sampler_of(s: &gltf::texture::Sampler) -> Sampler {
+    Sampler {
+        wrap_u: wrap_of(s.wrap_s()),
+        wrap_v: wrap_of(s.wrap_t()),
+        filter: match s.mag_filter() {
+            Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
+            _ => Filter::Linear,
+        },
+    }
+}
+
+impl<'a> TextureLoader<'a> {
+    pub(super) fn new(buffers: &'a [Vec<u8>], base: Option<&'a Path>) -> Self {
+        TextureLoader {
+            buffers,
+            base,
+            loaded: HashMap::new(),
+            budget: MAX_TEXELS,
+        }
+    }
+
+    /// The maps of material `m` (with factors `factors`), loading the
+    /// textures it reads into `scene`; `None` when it reads none. What is
+    /// ignored goes to the scene's warnings.
+    pub(super) fn maps_of(
+        &mut self,
+        m: &gltf::Material,
+        factors: GltfMaterial,
+        specular: bool,
+        scene: &mut Scene,
+    ) -> Result<Option<MaterialMaps>> {
+        let label = material_label(m);
+        warn_unmodelled(m, &label, scene);
+        let pbr = m.pbr_metallic_roughness();
+        let (base, mr) = (pbr.base_color_texture(), pbr.metallic_roughness_texture());
+        if base.is_none() && mr.is_none() {
+            return Ok(None);
+        }
+        if specular {
+            scene.warnings.push(format!(
+                "{label}: its textures are not read (a mirror or glass scatters by its factors)"
+            ));
+            return Ok(None);
+        }
+        let mut load = |info: Option<gltf::texture::Info>| -> Result<Option<TextureRef>> {
+            info.map(|i| self.texture_ref(&i, scene)).transpose()
+        };
+        let maps = MaterialMaps {
+            factors,
+            base_color: load(base)?,
+            metallic_roughness: load(mr)?,
+        };
+        Ok(Some(maps))
+    }
+
+    fn texture_ref(&mut self, info: &gltf::texture::Info, scene: &mut Scene) -> Result<TextureRef> {
+        let t = info.texture();
+        let index = match self.loaded.get(&t.index()) {
+            Some(&i) => i,
+            None => {
+                let texture = self.load(&t)?;
+                let i = scene.add_texture(texture);
+                self.loaded.insert(t.index(), i);
+                i
+            }
+        };
+        let (transform, tex_coord) = match info.texture_transform() {
+            Some(x) => (
+                TexTransform {
+                    offset: Vec2::from(x.offset()),
+                    rotation: x.rotation(),
+                    scale: Vec2::from(x.scale()),
+                },
+                x.tex_coord().unwrap_or(info.tex_coord()),
+            ),
+            None => (TexTransform::default(), info.tex_coord()),
+        };
+        Ok(TextureRef {
+            texture: index,
+            tex_coord: tex_coord as usize,
+            transform,
+        })
+    }
+
+    fn load(&mut self, t: &gltf::Texture) -> Result<Texture> {
+        let image = t.source();
+        let what = super::gltf_checks::label("image", image.index(), image.name());
+        let bytes = self.image_bytes(&image, &what)?;
+        let (w, h, texels) = decode(&what, &bytes, &mut self.budget)?;
+        Texture::new(w, h, texels, sampler_of(&t.sampler()))
+    }
+
+    fn image_bytes(&self, image: &gltf::Image, what: &str) -> Result<Vec<u8>> {
+        match image.source() {
+            gltf::image::Source::View { view, .. } => {
+                // Inside its buffer: checked by gltf_data::check_data.
+                let data = self.buffers.get(view.buffer().index()).ok_or_else(|| {
+                    Error::InvalidScene(format!("{what}: its bufferView's buffer is missing"))
+                })?;
+                let start = view.offset();
+                data.get(start..start + view.length())
+                    .map(<[u8]>::to_vec)
+                    .ok_or_else(|| Error::InvalidScene(format!("{what}: past its buffer's end")))
+            }
+            gltf::image::Source::Uri { uri, .. } => super::buffers::read_resource(
+                what,
+                uri,
+                super::buffers::MAX_BUFFER_BYTES,
+                self.base,
+            ),
+        }
+    }
+}
+
+fn material_label(m: &gltf::Material) -> String {
+    match m.index() {
+        Some(i) => super::gltf_checks::label("material", i, m.name()),
+        None => "the default material".to_string(),
+    }
+}
+
+/// Warns of the parts of `m` the loader reads but does not model.
+fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
+    let mut ignored = Vec::new();
+    if m.emissive_texture().is_some() {
+        ignored.push("its emissiveTexture (it emits its emissiveFactor everywhere)");
+    }
+    if m.normal_texture().is_some() {
+        ignored.push("its normalTexture (it is shaded with the mesh's normals)");
+    }
+    match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => {}
+        gltf::material::AlphaMode::Mask => ignored.push("alphaMode MASK (it is opaque)"),
+        gltf::material::AlphaMode::Blend => ignored.push("alphaMode BLEND (it is opaque)"),
+    }
+    for what in ignored {
+        scene
+            .warnings
+            .push(format!("{label}: {what} is not modelled"));
+    }
+}
+
+/// Reads the texture coordinates the mesh's material needs into mesh
+/// `mesh` of `scene`.
+pub(super) fn load_texcoords<'a, 's, F>(
+    scene: &mut Scene,
+    mesh: usize,
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    label: &str,
+) -> Result<()>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let material = scene.meshes[mesh].material;
+    let Some(maps) = scene.material_maps(material) else {
+        return Ok(());
+    };
+    let mut sets: Vec<usize> = [maps.base_color, maps.metallic_roughness]
+        .iter()
+        .flatten()
+        .map(|r| r.tex_coord)
+        .collect();
+    sets.sort_unstable();
+    sets.dedup();
+    for set in sets {
+        let Ok(set_u32) = u32::try_from(set) else {
+            continue;
+        };
+        let Some(uvs) = reader.read_tex_coords(set_u32) else {
+            return Err(Error::InvalidScene(format!(
+                "{label} has no TEXCOORD_{set}, which its material's textures read"
+            )));
+        };
+        let uvs: Vec<Vec2> = uvs.into_f32().map(Vec2::from).collect();
+        scene.set_texcoords(mesh, set, uvs)?;
+    }
+    Ok(())
+}
+
+/// The most texture coordinate sets a material may name (`TEXCOORD_0` to
+/// `TEXCOORD_31`): a larger `texCoord` is refused rather than allocated.
+const MAX_TEXCOORD_SETS: u32 = 32;
+
+/// Checks the JSON that texture reading touches, before any of the gltf
+/// crate's accessors (which index and unwrap) is called: texture, image and
+/// sampler indices, enumerations, image sources, transforms.
+pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
+    use gltf::json::validation::Checked;
+    let bad = |m: String| Err(Error::InvalidScene(m));
+    let label = super::gltf_checks::label;
+    for (i, m) in root.materials.iter().enumerate() {
+        let name = label("material", i, m.name.as_deref());
+        if !matches!(m.alpha_mode, Checked::Valid(_)) {
+            return bad(format!("{name} has an unknown alphaMode"));
+        }
+        let pbr = &m.pbr_metallic_roughness;
+        for info in [
+            &pbr.base_color_texture,
+            &pbr.metallic_roughness_texture,
+            &m.emissive_texture,
+        ]
+        .into_iter()
+        .flatten()
+        {
+            check_info(root, &name, info)?;
+        }
+        let others = [
+            m.normal_texture.as_ref().map(|t| t.index),
+            m.occlusion_texture.as_ref().map(|t| t.index),
+        ];
+        for index in others.into_iter().flatten() {
+            check_index(&name, "texture", index.value(), root.textures.len())?;
+        }
+    }
+    for (i, t) in root.textures.iter().enumerate() {
+        let name = label("texture", i, t.name.as_deref());
+        check_index(&name, "image", t.source.value(), root.images.len())?;
+        if let Some(s) = t.sampler {
+            check_index(&name, "sampler", s.value(), root.samplers.len())?;
+        }
+    }
+    for (i, s) in root.samplers.iter().enumerate() {
+        let name = label("sampler", i, s.name.as_deref());
+        let valid = matches!(s.wrap_s, Checked::Valid(_))
+            && matches!(s.wrap_t, Checked::Valid(_))
+            && s.mag_filter.is_none_or(|f| matches!(f, Checked::Valid(_)))
+            && s.min_filter.is_none_or(|f| matches!(f, Checked::Valid(_)));
+        if !valid {
+            return bad(format!("{name} has an unknown wrap mode or filter"));
+        }
+    }
+    for (i, im) in root.images.iter().enumerate() {
+        let name = label("image", i, im.name.as_deref());
+        match (&im.buffer_view, &im.uri) {
+            (Some(v), None) => {
+                check_index(&name, "bufferView", v.value(), root.buffer_views.len())?;
+                if im.mime_type.is_none() {
+                    return bad(format!("{name} has a bufferView but no mimeType"));
+                }
+            }
+            (None, Some(_)) => {}
+            _ => return bad(format!("{name} needs exactly one of uri and bufferView")),
+        }
+    }
+    Ok(())
+}
+
+fn check_index(name: &str, kind: &str, i: usize, len: usize) -> Result<()> {
+    if i < len {
+        return Ok(());
+    }
+    Err(Error::InvalidScene(format!(
+        "{name} refers to {kind} {i}, but there are only {len}"
+    )))
+}
+
+fn check_info(root: &gltf::json::Root, name: &str, info: &gltf::json::texture::Info) -> Result<()> {
+    check_index(name, "texture", info.index.value(), root.textures.len())?;
+    let transform = info
+        .extensions
+        .as_ref()
+        .and_then(|e| e.texture_transform.as_ref());
+    let sets = [Some(info.tex_coord), transform.and_then(|t| t.tex_coord)];
+    if let Some(set) = sets.into_iter().flatten().find(|&s| s >= MAX_TEXCOORD_SETS) {
+        return Err(Error::InvalidScene(format!(
+            "{name} reads TEXCOORD_{set}; at most {MAX_TEXCOORD_SETS} sets are read"
+        )));
+    }
+    if let Some(t) = transform {
+        let numbers = [
+            t.offset.0[0],
+            t.offset.0[1],
+            t.rotation.0,
+            t.scale.0[0],
+            t.scale.0[1],
+        ];
+        if !numbers.iter().all(|v| v.is_finite()) {
+            return Err(Error::InvalidScene(format!(
+                "{name} has a KHR_texture_transform that is not finite"
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,219 @@
+//! Textured materials: a glTF metallic-roughness material whose base colour
+//! and metallic-roughness factors are multiplied, at each surface point, by
+//! texels ([`super::texture`]), read at the mesh's interpolated texture
+//! coordinates.
+//!
+//! The material's own [`super::Material::brdf`] is the material at the
+//! textures' mean texels: what the directionality analysis, the albedo
+//! tables (survival probabilities) and the light's power estimates see.
+//! Those only steer how many photons go where (any positive count keeps the
+//! estimate unbiased, as the weights follow `power / m`). Every photon
+//! bounce and every camera vertex scatters by the BRDF at its own point,
+//! [`Scene::surface_brdf`].
+//!
+//! As glTF says (§3.9.2): base colour = `baseColorFactor * texel` (the
+//! texel sRGB-decoded), metalness = `metallicFactor * texel.b`, roughness =
+//! `roughnessFactor * texel.g` (linear). Texture alpha is not used (no
+//! `alphaMode` is modelled).
+//!
+//! A point scatters in its material's class: the textures of a mirror or of
+//! glass are not read (the tracer stores photons, and camera paths stop,
+//! by material), and a texel that would make a metal polished enough to be
+//! a mirror gives the sharpest lobe instead (roughness 0.0317).
+
+use super::texture::{Encoding, Texture, TextureRef};
+use super::Scene;
+use crate::brdf::{from_gltf_material, Brdf, GltfMaterial};
+use crate::error::{Error, Result};
+use crate::raycast::Hit;
+use glam::{Vec2, Vec3, Vec4};
+
+/// The roughness below which the glTF mapping makes a metal a mirror is
+/// `sqrt(GltfPbr::MIN_ALPHA)` = 0.03162...; a textured point is held just
+/// above it.
+const SMOOTHEST_TEXEL: f32 = 0.0317;
+
+/// The textures of a glTF material, with the factors they multiply.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialMaps {
+    /// The material's factors and extensions (as in the file).
+    pub factors: GltfMaterial,
+    /// `pbrMetallicRoughness.baseColorTexture` (sRGB).
+    pub base_color: Option<TextureRef>,
+    /// `pbrMetallicRoughness.metallicRoughnessTexture` (linear; roughness
+    /// in green, metalness in blue).
+    pub metallic_roughness: Option<TextureRef>,
+}
+
+impl MaterialMaps {
+    fn refs(&self) -> impl Iterator<Item = &TextureRef> {
+        self.base_color.iter().chain(&self.metallic_roughness)
+    }
+
+    /// The factors at texels `base` (decoded RGBA) and `mr`.
+    fn at(&self, base: Vec4, mr: Vec4) -> GltfMaterial {
+        GltfMaterial {
+            base_color: self.factors.base_color * base.truncate(),
+            metallic: self.factors.metallic * mr.z,
+            roughness: self.factors.roughness * mr.y,
+            ..self.factors
+        }
+    }
+}
+
+impl Scene {
+    /// Adds a texture and returns its index in [`Scene::textures`].
+    pub fn add_texture(&mut self, texture: Texture) -> usize {
+        self.textures.push(texture);
+        self.textures.len() - 1
+    }
+
+    /// The textures materials read.
+    pub fn textures(&self) -> &[Texture] {
+        &self.textures
+    }
+
+    /// Gives mesh `mesh` the texture coordinates `TEXCOORD_set`, one per
+    /// vertex.
+    ///
+    /// # Errors
+    /// [`Error::InvalidScene`] for an unknown mesh, a count that is not the
+    /// mesh's vertex count, or a coordinate that is not finite.
+    pub fn set_texcoords(&mut self, mesh: usize, set: usize, uvs: Vec<Vec2>) -> Result<()> {
+        let Some(m) = self.meshes.get_mut(mesh) else {
+            return Err(Error::InvalidScene(format!(
+                "no mesh {mesh} to give texture coordinates"
+            )));
+        };
+        if uvs.len() != m.positions.len() {
+            return Err(Error::InvalidScene(format!(
+                "mesh `{}` has {} vertices but {} TEXCOORD_{set} values",
+                m.name,
+                m.positions.len(),
+                uvs.len()
+            )));
+        }
+        if let Some(i) = uvs.iter().position(|uv| !uv.is_finite()) {
+            return Err(Error::InvalidScene(format!(
+                "mesh `{}` has a TEXCOORD_{set} value that is not finite (vertex {i})",
+                m.name
+            )));
+        }
+        if m.texcoords.len() <= set {
+            m.texcoords.resize(set + 1, Vec::new());
+        }
+        m.texcoords[set] = uvs;
+        Ok(())
+    }
+
+    /// Textures material `material`, and sets its [`super::Material::brdf`]
+    /// to the material at the textures' mean texels (module docs).
+    ///
+    /// # Errors
+    /// [`Error::InvalidScene`] for an unknown material or texture, or
+    /// factors the glTF mapping refuses, naming the material.
+    pub fn set_material_maps(&mut self, material: usize, maps: MaterialMaps) -> Result<()> {
+        let Some(m) = self.materials.get(material) else {
+            return Err(Error::InvalidScene(format!(
+                "no material {material} to texture"
+            )));
+        };
+        let name = m.name.clone();
+        if let Some(r) = maps.refs().find(|r| r.texture >= self.textures.len()) {
+            return Err(Error::InvalidScene(format!(
+                "material `{name}` reads texture {}, which does not exist",
+                r.texture
+            )));
+        }
+        let mean =
+            |r: &Option<TextureRef>, e| r.map_or(Vec4::ONE, |r| self.textures[r.texture].mean(e));
+        let at_mean = maps.at(
+            mean(&maps.base_color, Encoding::Srgb),
+            mean(&maps.metallic_roughness, Encoding::Linear),
+        );
+        let brdf = from_gltf_material(&at_mean)
+            .map_err(|e| Error::InvalidScene(format!("material `{name}`: {e}")))?;
+        self.materials[material].brdf = brdf;
+        if self.material_maps.len() <= material {
+            self.material_maps.resize(material + 1, None);
+        }
+        self.material_maps[material] = Some(maps);
+        Ok(())
+    }
+
+    /// The textures of material `material`, when it has any.
+    pub fn material_maps(&self, material: usize) -> Option<&MaterialMaps> {
+        self.material_maps.get(material)?.as_ref()
+    }
+
+    /// The BRDF at a hit: the material's, or for a textured material the
+    /// one its textures give at the hit's texture coordinates. A hit the
+    /// scene does not have gets the material's own BRDF (`Hit::check`
+    /// refuses those before shading).
+    pub fn surface_brdf(&self, hit: &Hit) -> Option<Brdf> {
+        let material = self.materials.get(hit.material as usize)?;
+        let Some(maps) = self.material_maps(hit.material as usize) else {
+            return Some(material.brdf);
+        };
+        // A point keeps its material's class: the tracer, the renderer and
+        // the path tracer decide per material where photons are stored and
+        // where paths pass through (module docs).
+        if material.brdf.is_specular() {
+            return Some(material.brdf);
+        }
+        let read = |r: &Option<TextureRef>, e| {
+            r.as_ref()
+                .and_then(|r| Some(self.textures[r.texture].sample(self.texcoord(hit, r)?, e)))
+                .unwrap_or(Vec4::ONE)
+        };
+        let mut at = maps.at(
+            read(&maps.base_color, Encoding::Srgb),
+            read(&maps.metallic_roughness, Encoding::Linear),
+        );
+        // A polished texel of a rough material stays a (sharp) lobe, not a
+        // mirror.
+        at.roughness = at.roughness.max(SMOOTHEST_TEXEL);
+        // Texels are in [0, 1] and the factors were checked: the mapping
+        // cannot refuse them, and would fall back to the mean if it did.
+        Some(from_gltf_material(&at).unwrap_or(material.brdf))
+    }
+
+    /// The transformed texture coordinates `r` reads at a hit, `None` when
+    /// the mesh lacks its set.
+    fn texcoord(&self, hit: &Hit, r: &TextureRef) -> Option<Vec2> {
+        let mesh = self.meshes.get(hit.geom_id as usize)?;
+        let uvs = mesh.texcoords.get(r.tex_coord).filter(|t| !t.is_empty())?;
+        let [a, b, c] = *mesh.indices.get(hit.prim_id as usize)?;
+        let (u, v) = (hit.u, hit.v);
+        let uv = uvs[a as usize] * (1.0 - u - v) + uvs[b as usize] * u + uvs[c as usize] * v;
+        Some(r.transform.apply(uv))
+    }
+
+    /// Checks that every mesh has the texture coordinates its material's
+    /// textures read.
+    pub(super) fn check_texcoords(&self) -> Result<()> {
+        for mesh in &self.meshes {
+            let Some(maps) = self.material_maps(mesh.material) else {
+                continue;
+            };
+            for r in maps.refs() {
+                if mesh.texcoords.get(r.tex_coord).is_none_or(Vec::is_empty) {
+                    return Err(Error::InvalidScene(format!(
+                        "mesh `{}` has no TEXCOORD_{}, which its material `{}` reads",
+                        mesh.name, r.tex_coord, self.materials[mesh.material].name
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The mean base colour a flat factor would need to stand in for `maps`
+/// (for tests and reports).
+pub fn flat_base_color(scene: &Scene, maps: &MaterialMaps) -> Vec3 {
+    let mean = maps.base_color.map_or(Vec4::ONE, |r| {
+        scene.textures[r.texture].mean(Encoding::Srgb)
+    });
+    maps.factors.base_color * mean.truncate()
+}

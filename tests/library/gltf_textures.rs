@@ -1,0 +1,281 @@
+//! Textured glTF materials: the texel under a hit sets the BRDF there
+//! (base colour sRGB-decoded, through the sampler and the texture
+//! transform), photons reflect by it, and bad texture data is refused by
+//! name. Scenes are small JSON files with their geometry and PNG images in
+//! a `data:` buffer.
+
+use adaptive_pm::brdf::Brdf;
+use adaptive_pm::embree::Device;
+use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
+use adaptive_pm::raycast::Ray;
+use adaptive_pm::scene::{flat_base_color, Scene};
+use glam::Vec3;
+use serde_json::{json, Value};
+use std::sync::Arc;
+
+use crate::common;
+use crate::gltf_doc::{square, Doc};
+
+const NEAREST_CLAMP: &str = r#"{"magFilter": 9728, "wrapS": 33071, "wrapT": 33071}"#;
+const NEAREST_REPEAT: &str = r#"{"magFilter": 9728}"#;
+
+/// An 8-bit RGB PNG of `w x h` pixels.
+fn png_rgb(w: u32, h: u32, rgb: &[[u8; 3]]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, w, h);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let data: Vec<u8> = rgb.iter().flatten().copied().collect();
+    enc.write_header().unwrap().write_image_data(&data).unwrap();
+    out
+}
+
+/// red, green / blue, white
+fn four_colours() -> Vec<u8> {
+    png_rgb(
+        2,
+        2,
+        &[[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]],
+    )
+}
+
+/// A 4 x 4 floor facing up at y = 0, its texture coordinates (0, 0) at
+/// (-2, -2) and (1, 1) at (2, 2); a lamp of half-size 0.5 facing down at
+/// y = 1; and, when `ceiling`, a black ceiling facing down at y = 1.5 that
+/// records the photons the floor reflects up. `floor` is the floor's
+/// material JSON; the texture, when given, is texture 0.
+fn floor_scene(texture: Option<(&[u8], &str)>, floor: Value, ceiling: bool) -> Doc {
+    let mut doc = Doc::default();
+    if let Some((png, sampler)) = texture {
+        doc.texture(png, serde_json::from_str(sampler).unwrap());
+    }
+    let floor_m = doc.material(floor);
+    let lamp = doc.material(json!({"name": "lamp", "emissiveFactor": [1.0, 1.0, 1.0],
+        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0}}));
+    let (p, i) = square(2.0, true);
+    let f = doc.mesh(&p, &i, 4, Some(floor_m));
+    doc.texcoords(f, &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
+    doc.node(json!({ "mesh": f }));
+    let (p, i) = square(0.5, false);
+    let l = doc.mesh(&p, &i, 4, Some(lamp));
+    doc.node(json!({"mesh": l, "translation": [0.0, 1.0, 0.0]}));
+    if ceiling {
+        let black = doc.material(json!({"name": "black",
+            "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0}}));
+        let (p, i) = square(2.0, false);
+        let c = doc.mesh(&p, &i, 4, Some(black));
+        doc.node(json!({"mesh": c, "translation": [0.0, 1.5, 0.0]}));
+    }
+    doc
+}
+
+fn matte(base: f32, texture: Option<Value>) -> Value {
+    let mut m = json!({"name": "floor", "pbrMetallicRoughness":
+        {"baseColorFactor": [base, base, base, 1.0], "metallicFactor": 0.0}});
+    if let Some(t) = texture {
+        m["pbrMetallicRoughness"]["baseColorTexture"] = t;
+    }
+    m
+}
+
+fn load(doc: &Doc) -> Scene {
+    let dir = tempfile::tempdir().unwrap();
+    Scene::load(doc.write(dir.path())).unwrap()
+}
+
+fn load_err(doc: &Doc) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    Scene::load(doc.write(dir.path())).unwrap_err().to_string()
+}
+
+/// The Lambert albedo at the floor point above which a ray at (x, 1, z)
+/// straight down lands.
+fn albedo_at(scene: &Scene, x: f32, z: f32) -> Vec3 {
+    let device = Device::new().unwrap();
+    let committed = scene.clone().commit(&device).unwrap();
+    let ray = Ray::new(Vec3::new(x, 0.5, z), Vec3::NEG_Y);
+    let hit = committed
+        .caster()
+        .intersect(&ray)
+        .expect("the floor is below");
+    match scene.surface_brdf(&hit) {
+        Some(Brdf::Lambert(l)) => l.albedo,
+        other => panic!("a matte floor is Lambert, got {other:?}"),
+    }
+}
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).abs().max_element() < 1e-6
+}
+
+#[test]
+fn the_texel_under_a_hit_sets_the_base_colour() {
+    let tex = json!({"index": 0});
+    let doc = floor_scene(
+        Some((&four_colours(), NEAREST_CLAMP)),
+        matte(1.0, Some(tex)),
+        false,
+    );
+    let scene = load(&doc);
+    assert!(close(albedo_at(&scene, -1.0, -1.0), Vec3::X), "red");
+    assert!(close(albedo_at(&scene, 1.0, -1.0), Vec3::Y), "green");
+    assert!(close(albedo_at(&scene, -1.0, 1.0), Vec3::Z), "blue");
+    assert!(close(albedo_at(&scene, 1.0, 1.0), Vec3::ONE), "white");
+    // The material's own BRDF is the texels' mean, for the photon counts.
+    let m = &scene.materials()[scene.meshes()[0].material];
+    assert!(matches!(m.brdf, Brdf::Lambert(l) if close(l.albedo, Vec3::splat(0.5))));
+    let maps = scene.material_maps(scene.meshes()[0].material).unwrap();
+    assert!(close(flat_base_color(&scene, maps), Vec3::splat(0.5)));
+}
+
+#[test]
+fn srgb_texels_are_decoded_and_factors_multiply_them() {
+    // sRGB 188 is linear 0.5029; the factor 0.5 halves it.
+    let png = png_rgb(1, 1, &[[188, 188, 188]]);
+    let doc = floor_scene(
+        Some((&png, NEAREST_CLAMP)),
+        matte(0.5, Some(json!({"index": 0}))),
+        false,
+    );
+    let want = 0.5 * ((188.0f32 / 255.0 + 0.055) / 1.055).powf(2.4);
+    let got = albedo_at(&load(&doc), 0.3, 0.7);
+    assert!(
+        (got - Vec3::splat(want)).abs().max_element() < 1e-5,
+        "{got} vs {want}"
+    );
+}
+
+#[test]
+fn the_texture_transform_moves_the_lookup() {
+    // Offset by half the image along u, with REPEAT: red's place reads green.
+    let tex = json!({"index": 0, "extensions": {"KHR_texture_transform": {"offset": [0.5, 0.0]}}});
+    let mut doc = floor_scene(
+        Some((&four_colours(), NEAREST_REPEAT)),
+        matte(1.0, Some(tex)),
+        false,
+    );
+    doc.extensions_used.push("KHR_texture_transform");
+    let scene = load(&doc);
+    assert!(close(albedo_at(&scene, -1.0, -1.0), Vec3::Y));
+    assert!(close(albedo_at(&scene, 1.0, -1.0), Vec3::X));
+    // A scale of 2 tiles the image twice: (-1, -1) is uv (0.5, 0.5), white.
+    let tex = json!({"index": 0, "extensions": {"KHR_texture_transform": {"scale": [2.0, 2.0]}}});
+    let mut doc = floor_scene(
+        Some((&four_colours(), NEAREST_REPEAT)),
+        matte(1.0, Some(tex)),
+        false,
+    );
+    doc.extensions_used.push("KHR_texture_transform");
+    assert!(close(albedo_at(&load(&doc), -0.9, -0.9), Vec3::ONE));
+}
+
+/// Power the floor reflects onto the ceiling (photons stored there at
+/// depth 1), and its standard error from the photons' own spread.
+fn reflected_up(scene: &Scene, seed: u64) -> (f64, f64) {
+    let device = Device::new().unwrap();
+    let tracer = Tracer::new(Arc::new(scene.clone().commit(&device).unwrap()));
+    let mut cfg = TraceConfig::new(Mode::Classic, Budget::NMax(300_000));
+    cfg.seed = seed;
+    let out = tracer.trace(&cfg).unwrap();
+    let powers: Vec<f64> = out
+        .records()
+        .iter()
+        .filter(|r| r.depth == 1 && (r.position.y - 1.5).abs() < 1e-3)
+        .map(|r| f64::from(r.power.x))
+        .collect();
+    let sum: f64 = powers.iter().sum();
+    // A sum of independent photons: its variance is the sum of squares.
+    let var: f64 = powers.iter().map(|p| p * p).sum();
+    (sum, var.sqrt())
+}
+
+#[test]
+fn a_textured_floor_reflects_like_its_mean_as_a_flat_factor() {
+    // A black and white checker, 32 x 32 squares over the floor, factor 0.8:
+    // it reflects like a flat 0.4, and half what the factor alone would.
+    let checker = png_rgb(
+        2,
+        2,
+        &[[255, 255, 255], [0, 0, 0], [0, 0, 0], [255, 255, 255]],
+    );
+    let tex = json!({"index": 0, "extensions": {"KHR_texture_transform": {"scale": [16.0, 16.0]}}});
+    let mut doc = floor_scene(
+        Some((&checker, NEAREST_REPEAT)),
+        matte(0.8, Some(tex)),
+        true,
+    );
+    doc.extensions_used.push("KHR_texture_transform");
+    let textured = load(&doc);
+    let maps = textured.material_maps(0).unwrap();
+    let mean = flat_base_color(&textured, maps).x;
+    assert!((mean - 0.4).abs() < 1e-6, "{mean}");
+    let flat = load(&floor_scene(None, matte(mean, None), true));
+    let factor_only = load(&floor_scene(None, matte(0.8, None), true));
+    let seed = common::seed(41);
+    let (t, t_se) = reflected_up(&textured, seed);
+    let (f, f_se) = reflected_up(&flat, seed + 1);
+    let (o, o_se) = reflected_up(&factor_only, seed + 2);
+    eprintln!(
+        "reflected up: textured {t} +- {t_se}, flat {f} +- {f_se}, factor alone {o} +- {o_se}"
+    );
+    let se = t_se.hypot(f_se);
+    common::assert_within_noise("textured vs flat mean", t - f, se, 4.0 * se);
+    // The texture is read: half of the factor alone, far outside the noise.
+    let half_se = (0.5 * o_se).hypot(t_se);
+    common::assert_within_noise(
+        "textured vs half the factor",
+        t - 0.5 * o,
+        half_se,
+        4.0 * half_se,
+    );
+}
+
+#[test]
+fn bad_texture_data_is_refused_by_name() {
+    let tex = |t: Value| {
+        floor_scene(
+            Some((&four_colours(), NEAREST_CLAMP)),
+            matte(1.0, Some(t)),
+            false,
+        )
+    };
+    let e = load_err(&tex(json!({"index": 3})));
+    assert!(e.contains("refers to texture 3"), "{e}");
+    let e = load_err(&tex(json!({"index": 0, "texCoord": 40})));
+    assert!(e.contains("TEXCOORD_40"), "{e}");
+    let e = load_err(&tex(json!({"index": 0, "texCoord": 1})));
+    assert!(e.contains("no TEXCOORD_1"), "{e}");
+    let mut broken = four_colours();
+    broken.truncate(30);
+    let doc = floor_scene(
+        Some((&broken, NEAREST_CLAMP)),
+        matte(1.0, Some(json!({"index": 0}))),
+        false,
+    );
+    let e = load_err(&doc);
+    assert!(e.contains("image 0") && e.contains("PNG"), "{e}");
+    let mut doc = floor_scene(
+        Some((&four_colours(), NEAREST_CLAMP)),
+        matte(1.0, Some(json!({"index": 0}))),
+        false,
+    );
+    doc.samplers[0]["wrapS"] = json!(1234);
+    assert!(load_err(&doc).contains("wrap mode"));
+}
+
+#[test]
+fn what_is_not_modelled_is_a_warning() {
+    let mut m = matte(1.0, Some(json!({"index": 0})));
+    m["emissiveTexture"] = json!({"index": 0});
+    m["normalTexture"] = json!({"index": 0});
+    m["alphaMode"] = json!("MASK");
+    let scene = load(&floor_scene(
+        Some((&four_colours(), NEAREST_CLAMP)),
+        m,
+        false,
+    ));
+    let w = scene.warnings().join("\n");
+    for what in ["emissiveTexture", "normalTexture", "alphaMode MASK"] {
+        assert!(w.contains(what), "{what} in {w}");
+    }
+}
