@@ -109,7 +109,7 @@
 //! | feature | default | what it brings |
 //! |---|---|---|
 //! | `embree` | yes | `embree` (the Intel Embree ray caster, through `adaptive-pm-embree-sys`), `Scene::commit`, photon files |
-//! | `gltf` | yes | `Scene::load` of glTF 2.0 files and the built-in Cornell box (textures are ignored) |
+//! | `gltf` | yes | `Scene::load` of glTF 2.0 files (PNG and JPEG textures included) and the built-in Cornell box |
 //! | `image-io` | yes | OpenEXR and PNG image files (`render::Image::write_exr`, `write_png`) |
 //! | `experiments` | with `cli` | the paper's experiments and their plots (`experiments`, for the command line: not a stable API) |
 //! | `cli` | yes | the `adaptive-pm` binary |

@@ -47,7 +47,9 @@
 //! Not modelled, and refused rather than approximated:
 //! `0 < transmissionFactor < 1` (a mix of glass and the opaque base) and
 //! transmission on a metal (`metallic > 0`). The extensions' textures are
-//! ignored, like every texture.
+//! ignored (the opaque materials' base colour and metallic-roughness
+//! textures are read by the scene loader, which maps each point's factors
+//! here).
 //!
 //! # The IOR
 //! Default 1.5. It must be in [1, 4] (the specification allows any value

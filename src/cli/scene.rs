@@ -18,7 +18,54 @@ pub struct SceneArgs {
 }
 
 fn brdf_name(b: &Brdf) -> String {
-    format!("{b:?}")
+    let rgb = |v: glam::Vec3| format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z);
+    match b {
+        Brdf::Lambert(l) => format!("lambert albedo {}", rgb(l.albedo)),
+        Brdf::Phong(p) => format!("phong kd {} ks {} n {}", rgb(p.kd()), rgb(p.ks()), p.exponent()),
+        Brdf::CookTorrance(c) => {
+            format!("cook-torrance m {} f0 {} kd {}", c.roughness(), rgb(c.f0()), rgb(c.kd()))
+        }
+        Brdf::GltfPbr(g) => format!(
+            "gltf-pbr base {} metallic {} alpha {} f0 {}",
+            rgb(g.base_color()),
+            g.metallic(),
+            g.alpha(),
+            g.dielectric_f0()
+        ),
+        Brdf::Mirror(m) => format!("mirror {}", rgb(m.reflectance())),
+        Brdf::Dielectric(d) => format!(
+            "dielectric ior {} tint {}{}",
+            d.ior(),
+            rgb(d.tint()),
+            if d.thin() { " thin" } else { "" }
+        ),
+        Brdf::RoughDielectric(d) => format!(
+            "rough-dielectric alpha {} ior {} tint {}{}",
+            d.alpha(),
+            d.ior(),
+            rgb(d.tint()),
+            if d.thin() { " thin" } else { "" }
+        ),
+    }
+}
+
+/// What a material's textures are, for the listing (empty when it has none).
+fn textures_note(scene: &Scene, material: usize) -> String {
+    let Some(maps) = scene.material_maps(material) else {
+        return String::new();
+    };
+    let size = |r: &adaptive_pm::scene::TextureRef| {
+        let t = &scene.textures()[r.texture];
+        format!("{} x {} (TEXCOORD_{})", t.width(), t.height(), r.tex_coord)
+    };
+    let mut parts = Vec::new();
+    if let Some(r) = &maps.base_color {
+        parts.push(format!("base colour {}", size(r)));
+    }
+    if let Some(r) = &maps.metallic_roughness {
+        parts.push(format!("metallic-roughness {}", size(r)));
+    }
+    format!("  textured: {} (BRDF shown at the mean texel)", parts.join(", "))
 }
 
 pub fn run(args: SceneArgs) -> anyhow::Result<()> {
@@ -77,16 +124,17 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
         );
     }
     println!("materials  {}", scene.materials().len());
-    for m in scene.materials() {
+    for (i, m) in scene.materials().iter().enumerate() {
         println!(
-            "  {:<16} {}{}",
+            "  {:<16} {}{}{}",
             m.name,
             brdf_name(&m.brdf),
             if m.emission.is_some() {
                 "  (emissive)"
             } else {
                 ""
-            }
+            },
+            textures_note(&scene, i)
         );
     }
     println!("lights     {}", scene.lights().len());

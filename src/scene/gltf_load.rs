@@ -21,7 +21,9 @@
 //!   (glass) and `KHR_materials_volume` (thin wall or refracting volume,
 //!   absorption); a value outside its range, partial transmission and
 //!   transmission on a metal are refused, naming the material.
-//! - Textures are ignored: only the constant factors are read.
+//! - Base colour and metallic-roughness textures multiply their factors
+//!   ([`super::gltf_textures`], [`super::textured`]); emissive and normal
+//!   textures and `alphaMode` are named in [`Scene::warnings`], not modelled.
 //! - `NORMAL` gives smooth shading normals ([`Scene::set_vertex_normals`]).
 
 use super::{Camera, Emission, Light, Material, PointLight, Scene, SpotLight};
