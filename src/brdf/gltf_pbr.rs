@@ -111,22 +111,40 @@ impl GltfPbr {
             }
         }
         let base_color = check_rgb01("gltf-pbr base colour", base_color)?;
+        Ok(Self::derive(Ggx { alpha }, base_color, metallic, f0_d))
+    }
+
+    /// The model of checked parameters, its derived terms computed.
+    fn derive(ggx: Ggx, base_color: Vec3, metallic: f32, f0_d: f32) -> Self {
         let kd = base_color * (1.0 - metallic);
-        let rest = 1.0 - average_fresnel_energy(alpha, f0_d);
+        let rest = 1.0 - average_fresnel_energy(ggx.alpha, f0_d);
         let base_scale = if rest > 0.0 && kd.max_element() > 0.0 {
             FRAC_1_PI / rest
         } else {
             0.0
         };
-        Ok(GltfPbr {
-            ggx: Ggx { alpha },
+        GltfPbr {
+            ggx,
             base_color,
             metallic,
             f0_d,
             f0: Vec3::splat(f0_d).lerp(base_color, metallic),
             kd,
             base_scale,
-        })
+        }
+    }
+
+    /// The same model with another base colour (a texel's), each channel
+    /// clamped to [0, 1]: what a textured point needs, without the checks
+    /// of [`Self::new`] on the parameters that did not change.
+    pub fn with_base_color(&self, base_color: Vec3) -> Self {
+        let base_color = base_color.clamp(Vec3::ZERO, Vec3::ONE);
+        let base_color = if base_color.is_finite() {
+            base_color
+        } else {
+            self.base_color
+        };
+        Self::derive(self.ggx, base_color, self.metallic, self.f0_d)
     }
 
     /// GGX alpha (glTF's roughness squared).

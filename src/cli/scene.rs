@@ -21,9 +21,19 @@ fn brdf_name(b: &Brdf) -> String {
     let rgb = |v: glam::Vec3| format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z);
     match b {
         Brdf::Lambert(l) => format!("lambert albedo {}", rgb(l.albedo)),
-        Brdf::Phong(p) => format!("phong kd {} ks {} n {}", rgb(p.kd()), rgb(p.ks()), p.exponent()),
+        Brdf::Phong(p) => format!(
+            "phong kd {} ks {} n {}",
+            rgb(p.kd()),
+            rgb(p.ks()),
+            p.exponent()
+        ),
         Brdf::CookTorrance(c) => {
-            format!("cook-torrance m {} f0 {} kd {}", c.roughness(), rgb(c.f0()), rgb(c.kd()))
+            format!(
+                "cook-torrance m {} f0 {} kd {}",
+                c.roughness(),
+                rgb(c.f0()),
+                rgb(c.kd())
+            )
         }
         Brdf::GltfPbr(g) => format!(
             "gltf-pbr base {} metallic {} alpha {} f0 {}",
@@ -65,7 +75,10 @@ fn textures_note(scene: &Scene, material: usize) -> String {
     if let Some(r) = &maps.metallic_roughness {
         parts.push(format!("metallic-roughness {}", size(r)));
     }
-    format!("  textured: {} (BRDF shown at the mean texel)", parts.join(", "))
+    format!(
+        "  textured: {} (BRDF shown at the mean texel)",
+        parts.join(", ")
+    )
 }
 
 pub fn run(args: SceneArgs) -> anyhow::Result<()> {

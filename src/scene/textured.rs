@@ -23,7 +23,7 @@
 
 use super::texture::{Encoding, Texture, TextureRef};
 use super::Scene;
-use crate::brdf::{from_gltf_material, Brdf, GltfMaterial};
+use crate::brdf::{from_gltf_material, Brdf, GltfMaterial, Lambert};
 use crate::error::{Error, Result};
 use crate::raycast::Hit;
 use glam::{Vec2, Vec3, Vec4};
@@ -166,10 +166,23 @@ impl Scene {
                 .and_then(|r| Some(self.textures[r.texture].sample(self.texcoord(hit, r)?, e)))
                 .unwrap_or(Vec4::ONE)
         };
-        let mut at = maps.at(
-            read(&maps.base_color, Encoding::Srgb),
-            read(&maps.metallic_roughness, Encoding::Linear),
-        );
+        let base = read(&maps.base_color, Encoding::Srgb);
+        if maps.metallic_roughness.is_none() {
+            // Only the colour varies, and it does not change which model
+            // the factors map to (module docs): the material's model with
+            // the texel's colour.
+            let colour = maps.factors.base_color * base.truncate();
+            match material.brdf {
+                Brdf::Lambert(_) => {
+                    if let Ok(l) = Lambert::new(colour) {
+                        return Some(l.into());
+                    }
+                }
+                Brdf::GltfPbr(g) => return Some(g.with_base_color(colour).into()),
+                _ => {}
+            }
+        }
+        let mut at = maps.at(base, read(&maps.metallic_roughness, Encoding::Linear));
         // A polished texel of a rough material stays a (sharp) lobe, not a
         // mirror.
         at.roughness = at.roughness.max(SMOOTHEST_TEXEL);
