@@ -279,3 +279,29 @@ fn what_is_not_modelled_is_a_warning() {
         assert!(w.contains(what), "{what} in {w}");
     }
 }
+
+#[test]
+fn an_image_file_beside_the_scene_is_read_and_one_outside_is_not() {
+    let doc = floor_scene(
+        Some((&four_colours(), NEAREST_CLAMP)),
+        matte(1.0, Some(json!({"index": 0}))),
+        false,
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let scene_dir = dir.path().join("scene");
+    std::fs::create_dir(&scene_dir).unwrap();
+    let path = doc.write(&scene_dir);
+    let with_uri = |uri: &str| {
+        let mut v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        v["images"][0] = json!({ "uri": uri });
+        std::fs::write(&path, v.to_string()).unwrap();
+    };
+    std::fs::write(scene_dir.join("four colours.png"), four_colours()).unwrap();
+    with_uri("four%20colours.png");
+    let scene = Scene::load(&path).unwrap();
+    assert!(close(albedo_at(&scene, 1.0, -1.0), Vec3::Y));
+    std::fs::write(dir.path().join("outside.png"), four_colours()).unwrap();
+    with_uri("../outside.png");
+    let e = Scene::load(&path).unwrap_err().to_string();
+    assert!(e.contains("image 0") && e.contains("folder"), "{e}");
+}
