@@ -125,7 +125,10 @@ pub fn concentric_disc(u: [f32; 2]) -> (f32, f32) {
     let (r, theta) = if a.abs() > b.abs() {
         (a, std::f32::consts::FRAC_PI_4 * (b / a))
     } else {
-        (b, std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (a / b))
+        (
+            b,
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (a / b),
+        )
     };
     (r * theta.cos(), r * theta.sin())
 }

@@ -138,9 +138,7 @@ impl<'a> LightSampler<'a> {
                 let (wi, r2, cos_x) = toward_centre();
                 luminance(s.intensity) * s.falloff(s.direction.dot(-wi)).max(0.05) * cos_x / r2
             }
-            Light::Directional(d) => {
-                luminance(d.irradiance()) * (-d.direction()).dot(n).max(0.05)
-            }
+            Light::Directional(d) => luminance(d.irradiance()) * (-d.direction()).dot(n).max(0.05),
         }
     }
 

@@ -586,10 +586,9 @@ impl Scene {
     /// Axis-aligned bounds of all meshes (and point and spot light positions);
     /// `lo` infinite and above `hi` when the scene is empty.
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        let (mut lo, mut hi) = self.geometry_bounds.unwrap_or((
-            Vec3::splat(f32::INFINITY),
-            Vec3::splat(f32::NEG_INFINITY),
-        ));
+        let (mut lo, mut hi) = self
+            .geometry_bounds
+            .unwrap_or((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)));
         for l in &self.lights {
             if let Some(p) = l.position() {
                 lo = lo.min(p);

@@ -44,14 +44,20 @@ fn scene_json_shows_a_directional_light() {
     let d: Vec<f64> = serde_json::from_value(sun["direction"].clone()).unwrap();
     let t = 30f64.to_radians();
     let want = [0.0, -t.cos(), -t.sin()];
-    assert!(d.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6), "{d:?}");
+    assert!(
+        d.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6),
+        "{d:?}"
+    );
     assert_eq!(sun["irradiance"].as_array().unwrap().len(), 3);
     let r = sun["disc_radius"].as_f64().unwrap();
     assert!((r - 2.5625f64.sqrt()).abs() < 1e-5, "{r}");
     assert_eq!(sun["area"], Value::Null);
     let (code, text, err) = run(&["scene", file]);
     assert_eq!(code, 0, "{err}");
-    assert!(text.contains("directional") && text.contains("disc radius 1.6008"), "{text}");
+    assert!(
+        text.contains("directional") && text.contains("disc radius 1.6008"),
+        "{text}"
+    );
 }
 
 #[test]

@@ -139,7 +139,11 @@ fn photons_leave_the_disc_along_the_light_and_are_deterministic() {
     assert!(primary.len() > 5_000, "{} first hits", primary.len());
     for p in &primary {
         let angle = p.direction.dot(w).clamp(-1.0, 1.0).acos();
-        assert!(angle <= MAX_DIRECTION_ERROR, "{} is {angle} rad off", p.direction);
+        assert!(
+            angle <= MAX_DIRECTION_ERROR,
+            "{} is {angle} rad off",
+            p.direction
+        );
     }
     // The same seed gives the same map, on one thread or two; another seed another.
     let checksum = |out: TraceOutput| out.into_map().checksum();
@@ -162,7 +166,10 @@ fn the_adaptive_mode_gives_the_sun_alpha_min() {
     let out = trace(&prepared, Mode::Adaptive, n_max, 1);
     let plan = out.plans[0];
     let alpha_min = AnalysisParams::default().alpha_min;
-    assert_eq!((plan.alpha_e, plan.alpha_a, plan.alpha_d), (1.0, 1.0, alpha_min));
+    assert_eq!(
+        (plan.alpha_e, plan.alpha_a, plan.alpha_d),
+        (1.0, 1.0, alpha_min)
+    );
     let expected = (f64::from(alpha_min) * n_max as f64).round() as u64;
     assert_eq!(plan.photons, expected);
     assert_eq!(out.report.emitted_per_light, vec![expected]);
@@ -274,7 +281,11 @@ fn the_renderer_and_the_path_tracer_give_e_cos_theta_exactly() {
     let irradiance = E * cos_theta();
     let radiance = irradiance * (ALBEDO / PI);
     let mut rng = Rng::new(5);
-    for x in [Vec3::ZERO, Vec3::new(0.7, 0.0, -0.4), Vec3::new(-0.9, 0.0, 0.9)] {
+    for x in [
+        Vec3::ZERO,
+        Vec3::new(0.7, 0.0, -0.4),
+        Vec3::new(-0.9, 0.0, 0.9),
+    ] {
         let e = quadrature_irradiance(&prepared, x, Vec3::Y, 4);
         assert!(close(e, irradiance, 1e-5), "quadrature {e} at {x}");
         let u = rng.next_2d();
@@ -333,7 +344,10 @@ fn a_sun_beside_an_emissive_panel_loads_and_lights_the_floor() {
         }
     }
     // The panel has 3 % of the power, so about 3 % of the photons.
-    assert!(from_sun > 10_000 && from_panel > 200, "{from_sun} / {from_panel}");
+    assert!(
+        from_sun > 10_000 && from_panel > 200,
+        "{from_sun} / {from_panel}"
+    );
 
     let lights = LightSampler::new(&prepared);
     let brdf: Brdf = Lambert::new(Vec3::splat(ALBEDO)).unwrap().into();
@@ -362,11 +376,19 @@ fn bad_directional_lights_are_refused_by_name() {
         assert!(matches!(err, Error::InvalidScene(_)), "{err}");
         err.to_string()
     };
-    for d in [Vec3::ZERO, Vec3::new(f32::NAN, 0.0, -1.0), Vec3::splat(f32::INFINITY)] {
+    for d in [
+        Vec3::ZERO,
+        Vec3::new(f32::NAN, 0.0, -1.0),
+        Vec3::splat(f32::INFINITY),
+    ] {
         let msg = refused(&mut s, d, E);
         assert!(msg.contains("directional light direction"), "{msg}");
     }
-    for e in [Vec3::new(-1.0, 1.0, 1.0), Vec3::splat(f32::NAN), Vec3::splat(f32::INFINITY)] {
+    for e in [
+        Vec3::new(-1.0, 1.0, 1.0),
+        Vec3::splat(f32::NAN),
+        Vec3::splat(f32::INFINITY),
+    ] {
         let msg = refused(&mut s, -Vec3::Y, e);
         assert!(msg.contains("directional light irradiance"), "{msg}");
     }
@@ -386,7 +408,10 @@ fn bad_directional_lights_are_refused_by_name() {
     let sun = Light::Directional(DirectionalLight::new(-Vec3::Y, Vec3::splat(1e30)));
     bright.add_light(sun).unwrap();
     let msg = bright.validate().unwrap_err().to_string();
-    assert!(msg.contains("directional light 1") && msg.contains("above"), "{msg}");
+    assert!(
+        msg.contains("directional light 1") && msg.contains("above"),
+        "{msg}"
+    );
 }
 
 /// The file's Sun node edited by `edit`, loaded.
@@ -404,7 +429,10 @@ fn load_edited(edit: impl Fn(&mut serde_json::Value)) -> adaptive_pm::Result<Sce
 fn a_sun_without_direction_or_geometry_is_refused_on_load() {
     let flat = load_edited(|d| d["nodes"][0]["scale"] = serde_json::json!([0.0, 0.0, 0.0]));
     let msg = common::chain(&flat.unwrap_err());
-    assert!(msg.contains("node 0 (`sun`)") && msg.contains("zero scale"), "{msg}");
+    assert!(
+        msg.contains("node 0 (`sun`)") && msg.contains("zero scale"),
+        "{msg}"
+    );
     let alone = load_edited(|d| d["scenes"][0]["nodes"] = serde_json::json!([0]));
     let msg = common::chain(&alone.unwrap_err());
     assert!(msg.contains("directional light but no triangle"), "{msg}");
