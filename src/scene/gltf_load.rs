@@ -190,7 +190,7 @@ fn load_node(
                 scene.set_vertex_normals(index, n)?;
             }
             let prim_label = format!("{mesh_label} primitive {pi}");
-            super::gltf_textures::load_texcoords(scene, index, &reader, &prim_label)?;
+            super::gltf_textures::load_texcoords(scene, index, (&prim, &reader), &prim_label)?;
         }
     }
     if let Some(light) = node.light() {

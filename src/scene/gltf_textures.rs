@@ -185,7 +185,7 @@ fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
 pub(super) fn load_texcoords<'a, 's, F>(
     scene: &mut Scene,
     mesh: usize,
-    reader: &gltf::mesh::Reader<'a, 's, F>,
+    (prim, reader): (&gltf::Primitive, &gltf::mesh::Reader<'a, 's, F>),
     label: &str,
 ) -> Result<()>
 where
@@ -206,6 +206,21 @@ where
         let Ok(set_u32) = u32::try_from(set) else {
             continue;
         };
+        // The gltf crate's reader reaches `unreachable!` on a signed or
+        // unnormalized integer type: only the core spec's three are read.
+        if let Some(a) = prim.get(&gltf::Semantic::TexCoords(set_u32)) {
+            use gltf::accessor::DataType as D;
+            let ok = match a.data_type() {
+                D::F32 => true,
+                D::U8 | D::U16 => a.normalized(),
+                _ => false,
+            };
+            if !ok || a.dimensions() != gltf::accessor::Dimensions::Vec2 {
+                return Err(Error::InvalidScene(format!(
+                    "{label}: TEXCOORD_{set} must be VEC2 of floats or normalized unsigned bytes or shorts"
+                )));
+            }
+        }
         let Some(uvs) = reader.read_tex_coords(set_u32) else {
             return Err(Error::InvalidScene(format!(
                 "{label} has no TEXCOORD_{set}, which its material's textures read"

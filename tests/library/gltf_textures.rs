@@ -261,6 +261,19 @@ fn bad_texture_data_is_refused_by_name() {
     );
     doc.samplers[0]["wrapS"] = json!(1234);
     assert!(load_err(&doc).contains("wrap mode"));
+    // Signed bytes as texture coordinates (the gltf crate's reader would
+    // reach `unreachable!`): refused, not a panic.
+    let mut doc = floor_scene(
+        Some((&four_colours(), NEAREST_CLAMP)),
+        matte(1.0, Some(json!({"index": 0}))),
+        false,
+    );
+    let uv = doc.meshes[0]["primitives"][0]["attributes"]["TEXCOORD_0"]
+        .as_u64()
+        .unwrap() as usize;
+    doc.accessors[uv]["componentType"] = json!(5120);
+    doc.accessors[uv]["normalized"] = json!(true);
+    assert!(load_err(&doc).contains("TEXCOORD_0 must be"));
 }
 
 #[test]
