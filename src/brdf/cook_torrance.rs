@@ -100,12 +100,7 @@ impl CookTorrance {
 
     fn p_spec(&self, cos_i: f32) -> f32 {
         let f = schlick(self.f0, cos_i);
-        let (ls, ld) = (luminance(f), luminance(self.kd * (Vec3::ONE - f)));
-        if ls + ld > 0.0 {
-            ls / (ls + ld)
-        } else {
-            1.0
-        }
+        super::lobe_share(luminance(f), luminance(self.kd * (Vec3::ONE - f)))
     }
 
     /// The specular term without the 1/(4 cos_i cos_o) split out: returns
@@ -147,13 +142,12 @@ impl CookTorrance {
             return None;
         }
         let ps = self.p_spec(wi.z);
-        let wo = if u[0] < ps {
-            let u0 = (u[0] / ps).min(0.999_999_94);
-            let h = self.sample_h([u0, u[1]]);
-            2.0 * wi.dot(h) * h - wi
-        } else {
-            let u0 = ((u[0] - ps) / (1.0 - ps)).min(0.999_999_94);
-            cosine_hemisphere([u0, u[1]])
+        let wo = match super::pick_lobe(u[0], ps) {
+            (true, u0) => {
+                let h = self.sample_h([u0, u[1]]);
+                2.0 * wi.dot(h) * h - wi
+            }
+            (false, u0) => cosine_hemisphere([u0, u[1]]),
         };
         if wo.z <= 0.0 {
             return None;

@@ -206,15 +206,10 @@ impl GltfPbr {
     }
 
     fn p_spec(&self, cos_i: f32) -> f32 {
-        let (ls, ld) = (
+        super::lobe_share(
             luminance(self.fresnel(cos_i)),
             luminance(self.albedo_of_base(cos_i)),
-        );
-        if ls + ld > 0.0 {
-            ls / (ls + ld)
-        } else {
-            1.0
-        }
+        )
     }
 
     /// Evaluates the BRDF (0 when either direction is below the horizon).
@@ -241,17 +236,16 @@ impl GltfPbr {
             return None;
         }
         let ps = self.p_spec(wi.z);
-        let wo = if u[0] < ps {
-            let u0 = (u[0] / ps).min(0.999_999_94);
-            let m = self.ggx.sample_m(wi, [u0, u[1]]);
-            let im = wi.dot(m);
-            if im <= 0.0 {
-                return None;
+        let wo = match super::pick_lobe(u[0], ps) {
+            (true, u0) => {
+                let m = self.ggx.sample_m(wi, [u0, u[1]]);
+                let im = wi.dot(m);
+                if im <= 0.0 {
+                    return None;
+                }
+                (2.0 * im * m - wi).normalize()
             }
-            (2.0 * im * m - wi).normalize()
-        } else {
-            let u0 = ((u[0] - ps) / (1.0 - ps)).min(0.999_999_94);
-            cosine_hemisphere([u0, u[1]])
+            (false, u0) => cosine_hemisphere([u0, u[1]]),
         };
         if wo.z <= 0.0 {
             return None;

@@ -68,6 +68,29 @@ pub(crate) fn weighted_sample(wo: Vec3, pdf: f32, f: Vec3) -> Option<BrdfSample>
     })
 }
 
+/// A two-lobe sampler's choice: whether the first uniform `u0` picks the
+/// first lobe (probability `p_first`), and `u0` rescaled to [0, 1) for the
+/// lobe it picked, so one uniform serves both the choice and the lobe.
+#[inline]
+pub(crate) fn pick_lobe(u0: f32, p_first: f32) -> (bool, f32) {
+    if u0 < p_first {
+        (true, (u0 / p_first).min(0.999_999_94))
+    } else {
+        (false, ((u0 - p_first) / (1.0 - p_first)).min(0.999_999_94))
+    }
+}
+
+/// The probability of sampling a lobe of weight `a` beside one of weight
+/// `b`: `a / (a + b)`, and 1 when both are 0.
+#[inline]
+pub(crate) fn lobe_share(a: f32, b: f32) -> f32 {
+    if a + b > 0.0 {
+        a / (a + b)
+    } else {
+        1.0
+    }
+}
+
 /// The reflection models a scene may use.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Brdf {

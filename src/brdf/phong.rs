@@ -117,14 +117,12 @@ impl Phong {
         if wi.z <= 0.0 || (self.kd == Vec3::ZERO && self.ks == Vec3::ZERO) {
             return None;
         }
-        let wo = if u[0] < self.p_spec {
-            // Reuse u[0] after rescaling to [0, 1) for the lobe.
-            let u0 = (u[0] / self.p_spec).min(0.999_999_94);
-            let local = cos_power_hemisphere(self.exponent, [u0, u[1]]);
-            Frame::from_normal(reflect_z(wi)).world_from_local(local)
-        } else {
-            let u0 = ((u[0] - self.p_spec) / (1.0 - self.p_spec)).min(0.999_999_94);
-            cosine_hemisphere([u0, u[1]])
+        let wo = match super::pick_lobe(u[0], self.p_spec) {
+            (true, u0) => {
+                let local = cos_power_hemisphere(self.exponent, [u0, u[1]]);
+                Frame::from_normal(reflect_z(wi)).world_from_local(local)
+            }
+            (false, u0) => cosine_hemisphere([u0, u[1]]),
         };
         if wo.z <= 0.0 {
             return None;

@@ -465,19 +465,7 @@ impl Scene {
     /// [`Error::InvalidScene`] for an unknown mesh or a count that is not the
     /// mesh's vertex count.
     pub fn set_vertex_normals(&mut self, mesh: usize, normals: Vec<Vec3>) -> Result<()> {
-        let Some(m) = self.meshes.get_mut(mesh) else {
-            return Err(Error::InvalidScene(format!(
-                "no mesh {mesh} to give normals"
-            )));
-        };
-        if normals.len() != m.positions.len() {
-            return Err(Error::InvalidScene(format!(
-                "mesh `{}` has {} vertices but {} normals",
-                m.name,
-                m.positions.len(),
-                normals.len()
-            )));
-        }
+        let m = self.mesh_for_vertex_data(mesh, normals.len(), ("normals", "normals".into()))?;
         let unit: Vec<Vec3> = normals.iter().map(|n| n.normalize_or_zero()).collect();
         m.normals = if unit.iter().all(|n| *n != Vec3::ZERO) {
             unit
@@ -485,6 +473,29 @@ impl Scene {
             Vec::new()
         };
         Ok(())
+    }
+
+    /// Mesh `mesh`, when it exists and has `n` vertices, for per-vertex
+    /// data named `(what it is given, what the values are)` in errors.
+    fn mesh_for_vertex_data(
+        &mut self,
+        mesh: usize,
+        n: usize,
+        (given, values): (&str, String),
+    ) -> Result<&mut Mesh> {
+        let Some(m) = self.meshes.get_mut(mesh) else {
+            return Err(Error::InvalidScene(format!(
+                "no mesh {mesh} to give {given}"
+            )));
+        };
+        if n != m.positions.len() {
+            return Err(Error::InvalidScene(format!(
+                "mesh `{}` has {} vertices but {n} {values}",
+                m.name,
+                m.positions.len()
+            )));
+        }
+        Ok(m)
     }
 
     /// Adds a punctual light (point, spot or directional) and returns its

@@ -80,19 +80,8 @@ impl Scene {
     /// [`Error::InvalidScene`] for an unknown mesh, a count that is not the
     /// mesh's vertex count, or a coordinate that is not finite.
     pub fn set_texcoords(&mut self, mesh: usize, set: usize, uvs: Vec<Vec2>) -> Result<()> {
-        let Some(m) = self.meshes.get_mut(mesh) else {
-            return Err(Error::InvalidScene(format!(
-                "no mesh {mesh} to give texture coordinates"
-            )));
-        };
-        if uvs.len() != m.positions.len() {
-            return Err(Error::InvalidScene(format!(
-                "mesh `{}` has {} vertices but {} TEXCOORD_{set} values",
-                m.name,
-                m.positions.len(),
-                uvs.len()
-            )));
-        }
+        let what = ("texture coordinates", format!("TEXCOORD_{set} values"));
+        let m = self.mesh_for_vertex_data(mesh, uvs.len(), what)?;
         if let Some(i) = uvs.iter().position(|uv| !uv.is_finite()) {
             return Err(Error::InvalidScene(format!(
                 "mesh `{}` has a TEXCOORD_{set} value that is not finite (vertex {i})",
