@@ -25,12 +25,18 @@
 //!   ([`super::gltf_textures`], [`super::textured`]); emissive and normal
 //!   textures and `alphaMode` are named in [`Scene::warnings`], not modelled.
 //! - `NORMAL` gives smooth shading normals ([`Scene::set_vertex_normals`]).
+//! - `KHR_mesh_quantization`: POSITION, NORMAL and TEXCOORD_n may be 8- or
+//!   16-bit integers ([`super::gltf_quantized`]): normalized ones are
+//!   dequantized, others read as their values (the node's transform, or the
+//!   texture transform, scales them).
 
+use super::gltf_quantized::read_f32_vectors;
 use super::{Camera, Emission, Light, Material, PointLight, Scene, SpotLight};
 use crate::brdf::gltf_map::{from_gltf_material, GltfMaterial, GltfVolume};
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec3};
+use gltf::mesh::Semantic;
 use std::path::Path;
 
 pub(super) fn load_path(path: &Path) -> Result<Scene> {
@@ -148,12 +154,13 @@ fn load_node(
                 continue;
             }
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
-            let Some(positions) = reader.read_positions() else {
+            let Some(positions) = prim.get(&Semantic::Positions) else {
                 return Err(Error::InvalidScene(format!(
                     "{mesh_label} primitive {pi} has no POSITION attribute"
                 )));
             };
-            let positions: Vec<Vec3> = positions
+            let positions: Vec<Vec3> = read_f32_vectors::<3>(&positions, buffers)?
+                .into_iter()
                 .map(|p| world.transform_point3(Vec3::from(p)))
                 .collect();
             let flat: Vec<u32> = match reader.read_indices() {
@@ -177,8 +184,13 @@ fn load_node(
             };
             // NORMAL: shading normals, by the inverse transpose of the node's matrix.
             let normal_matrix = world.inverse().transpose();
-            let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| {
-                n.map(|v| normal_matrix.transform_vector3(Vec3::from(v)))
+            let normals = match prim.get(&Semantic::Normals) {
+                Some(n) => Some(read_f32_vectors::<3>(&n, buffers)?),
+                None => None,
+            };
+            let normals: Option<Vec<Vec3>> = normals.map(|n| {
+                n.into_iter()
+                    .map(|v| normal_matrix.transform_vector3(Vec3::from(v)))
                     .collect()
             });
             let name = format!("{}#{pi}", mesh.name().unwrap_or("mesh"));
@@ -187,7 +199,7 @@ fn load_node(
                 scene.set_vertex_normals(index, n)?;
             }
             let prim_label = format!("{mesh_label} primitive {pi}");
-            super::gltf_textures::load_texcoords(scene, index, &reader, &prim_label)?;
+            super::gltf_textures::load_texcoords(scene, index, &prim, buffers, &prim_label)?;
         }
     }
     if let Some(light) = node.light() {

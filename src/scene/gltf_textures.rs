@@ -180,17 +180,15 @@ fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
     }
 }
 
-/// Reads the texture coordinates the mesh's material needs into mesh
-/// `mesh` of `scene`.
-pub(super) fn load_texcoords<'a, 's, F>(
+/// Reads the texture coordinates the mesh's material needs, from primitive
+/// `prim`, into mesh `mesh` of `scene`.
+pub(super) fn load_texcoords(
     scene: &mut Scene,
     mesh: usize,
-    reader: &gltf::mesh::Reader<'a, 's, F>,
+    prim: &gltf::Primitive,
+    buffers: &[Vec<u8>],
     label: &str,
-) -> Result<()>
-where
-    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
-{
+) -> Result<()> {
     let material = scene.meshes[mesh].material;
     let Some(maps) = scene.material_maps(material) else {
         return Ok(());
@@ -206,12 +204,13 @@ where
         let Ok(set_u32) = u32::try_from(set) else {
             continue;
         };
-        let Some(uvs) = reader.read_tex_coords(set_u32) else {
+        let Some(uvs) = prim.get(&gltf::mesh::Semantic::TexCoords(set_u32)) else {
             return Err(Error::InvalidScene(format!(
                 "{label} has no TEXCOORD_{set}, which its material's textures read"
             )));
         };
-        let uvs: Vec<Vec2> = uvs.into_f32().map(Vec2::from).collect();
+        let uvs = super::gltf_quantized::read_f32_vectors::<2>(&uvs, buffers)?;
+        let uvs: Vec<Vec2> = uvs.into_iter().map(Vec2::from).collect();
         scene.set_texcoords(mesh, set, uvs)?;
     }
     Ok(())

@@ -23,6 +23,8 @@ mod gltf_images;
 #[cfg(feature = "gltf")]
 mod gltf_load;
 #[cfg(feature = "gltf")]
+mod gltf_quantized;
+#[cfg(feature = "gltf")]
 mod gltf_textures;
 mod light;
 mod prepared;
