@@ -363,3 +363,93 @@ fn declares_quantization(root: &Root) -> bool {
         .chain(&root.extensions_required)
         .any(|e| e == KHR_MESH_QUANTIZATION)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The accessor 0 of a document of one buffer, `buffers`' first.
+    fn read<const N: usize>(
+        accessor: serde_json::Value,
+        views: serde_json::Value,
+        bin: &[u8],
+    ) -> Result<Vec<[f32; N]>> {
+        let doc = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "buffers": [{"byteLength": bin.len()}],
+            "bufferViews": views,
+            "accessors": [accessor],
+        });
+        let gltf = gltf::Gltf::from_slice_without_validation(doc.to_string().as_bytes()).unwrap();
+        let accessor = gltf.document.accessors().next().unwrap();
+        read_f32_vectors::<N>(&accessor, &[bin.to_vec()])
+    }
+
+    fn storage(component: ComponentType, normalized: bool) -> Storage {
+        Storage {
+            component,
+            normalized,
+        }
+    }
+
+    #[test]
+    fn normalized_integers_dequantize_as_the_extension_says() {
+        use ComponentType::*;
+        let value = |s: Storage, b: &[u8]| s.component_value(b).unwrap();
+        assert_eq!(value(storage(I8, true), &[127]), 1.0);
+        assert_eq!(value(storage(I8, true), &[(-127i8) as u8]), -1.0);
+        assert_eq!(value(storage(I8, true), &[(-128i8) as u8]), -1.0);
+        assert_eq!(value(storage(I8, true), &[64]), 64.0 / 127.0);
+        assert_eq!(value(storage(U8, true), &[255]), 1.0);
+        assert_eq!(value(storage(U8, true), &[51]), 0.2);
+        assert_eq!(value(storage(I16, true), &(-32768i16).to_le_bytes()), -1.0);
+        assert_eq!(value(storage(I16, true), &32767i16.to_le_bytes()), 1.0);
+        assert_eq!(value(storage(U16, true), &65535u16.to_le_bytes()), 1.0);
+        // Not normalized: the integer itself.
+        assert_eq!(value(storage(I8, false), &[(-128i8) as u8]), -128.0);
+        assert_eq!(value(storage(U16, false), &65535u16.to_le_bytes()), 65535.0);
+        assert_eq!(value(storage(F32, false), &1.5f32.to_le_bytes()), 1.5);
+        // Only exactly one component's bytes are read.
+        assert_eq!(storage(I16, false).component_value(&[1]), None);
+    }
+
+    #[test]
+    fn strided_bytes_and_sparse_values_are_read() {
+        // Two BYTE VEC3 in a stride of 4 (the fourth byte is padding), then
+        // a sparse value for element 1 right after them.
+        let bin = [1, 2, 3, 99, (-128i8) as u8, 127, 0, 99, 1, 7, 8, 9];
+        let views = serde_json::json!([
+            {"buffer": 0, "byteLength": 8, "byteStride": 4},
+            {"buffer": 0, "byteOffset": 8, "byteLength": 4},
+        ]);
+        let plain = serde_json::json!({"bufferView": 0, "componentType": 5120, "normalized": true, "count": 2, "type": "VEC3"});
+        let v = read::<3>(plain.clone(), views.clone(), &bin).unwrap();
+        assert_eq!(v[0], [1.0 / 127.0, 2.0 / 127.0, 3.0 / 127.0]);
+        assert_eq!(v[1], [-1.0, 1.0, 0.0]);
+        let mut sparse = plain;
+        sparse["sparse"] = serde_json::json!({"count": 1,
+            "indices": {"bufferView": 1, "componentType": 5121},
+            "values": {"bufferView": 1, "byteOffset": 1}});
+        let v = read::<3>(sparse, views, &bin).unwrap();
+        assert_eq!(v[1], [7.0 / 127.0, 8.0 / 127.0, 9.0 / 127.0]);
+    }
+
+    #[test]
+    fn what_the_data_check_would_refuse_is_an_error_here_too() {
+        let views = serde_json::json!([{"buffer": 0, "byteLength": 4, "byteStride": 4}]);
+        let too_many = serde_json::json!({"bufferView": 0, "componentType": 5122, "count": 2, "type": "VEC2", "name": "uv"});
+        let e = read::<2>(too_many, views.clone(), &[0; 4])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("accessor 0 (`uv`) element 1 lies past"), "{e}");
+        let wide = serde_json::json!({"bufferView": 0, "componentType": 5125, "count": 1, "type": "SCALAR"});
+        let e = read::<1>(wide, views.clone(), &[0; 4])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("UNSIGNED_INT"), "{e}");
+        let vec2 =
+            serde_json::json!({"bufferView": 0, "componentType": 5122, "count": 1, "type": "VEC2"});
+        let e = read::<3>(vec2, views, &[0; 4]).unwrap_err().to_string();
+        assert!(e.contains("is Vec2, not a vector of 3"), "{e}");
+    }
+}
