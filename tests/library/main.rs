@@ -23,6 +23,7 @@ mod glass_transport;
 mod gltf_conformance;
 mod gltf_doc;
 mod gltf_glass;
+mod gltf_quantized;
 mod gltf_textures;
 mod gltf_validator;
 mod hostile;
