@@ -6,9 +6,10 @@
 //! and BLEND, and the textures of mirrors and glass.
 //!
 //! Images come from a `bufferView` (a GLB's usual form) or a `data:` URI.
-//! Image files beside the scene (`uri: "wood.png"`) are read like buffers:
-//! only inside the scene's folder (see [`super::buffers`]).
+//! Image files (`uri: "wood.png"`, `../textures/wood.png`) are read like
+//! buffers: only inside the scene's asset root (see [`super::assets`]).
 
+use super::assets::AssetRoot;
 use super::gltf_images::{decode, MAX_TEXELS};
 use super::texture::{Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
 use super::textured::MaterialMaps;
@@ -17,12 +18,11 @@ use crate::brdf::GltfMaterial;
 use crate::error::{Error, Result};
 use glam::Vec2;
 use std::collections::HashMap;
-use std::path::Path;
 
 /// Loads each texture once, the first time a material reads it.
 pub(super) struct TextureLoader<'a> {
     buffers: &'a [Vec<u8>],
-    base: Option<&'a Path>,
+    assets: Option<&'a AssetRoot>,
     /// glTF texture index -> scene texture index.
     loaded: HashMap<usize, usize>,
     /// Texels the scene's textures may still take.
@@ -50,10 +50,10 @@ fn sampler_of(s: &gltf::texture::Sampler) -> Sampler {
 }
 
 impl<'a> TextureLoader<'a> {
-    pub(super) fn new(buffers: &'a [Vec<u8>], base: Option<&'a Path>) -> Self {
+    pub(super) fn new(buffers: &'a [Vec<u8>], assets: Option<&'a AssetRoot>) -> Self {
         TextureLoader {
             buffers,
-            base,
+            assets,
             loaded: HashMap::new(),
             budget: MAX_TEXELS,
         }
@@ -142,11 +142,11 @@ impl<'a> TextureLoader<'a> {
                     .map(<[u8]>::to_vec)
                     .ok_or_else(|| Error::InvalidScene(format!("{what}: past its buffer's end")))
             }
-            gltf::image::Source::Uri { uri, .. } => super::buffers::read_resource(
+            gltf::image::Source::Uri { uri, .. } => super::assets::read_resource(
                 what,
                 uri,
                 super::buffers::MAX_BUFFER_BYTES,
-                self.base,
+                self.assets,
             ),
         }
     }
