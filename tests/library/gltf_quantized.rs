@@ -303,13 +303,20 @@ fn normals_stored_as_normalized_bytes_point_up() {
     }
 }
 
+/// A file edit, and the words its refusal must hold.
+type Refusal = (
+    &'static str,
+    Box<dyn Fn(&mut Value)>,
+    &'static [&'static str],
+);
+
 #[test]
 fn storage_the_extension_does_not_allow_is_refused_naming_the_accessor() {
     let short = Storage {
         component: SHORT,
         normalized: false,
     };
-    let cases: Vec<(&str, Box<dyn Fn(&mut Value)>, &[&str])> = vec![
+    let cases: Vec<Refusal> = vec![
         (
             "quantized positions without the extension",
             Box::new(|v| {
