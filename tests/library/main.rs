@@ -20,6 +20,7 @@ mod embree_wrapper;
 mod engine;
 mod fixtures;
 mod glass_transport;
+mod gltf_asset_root;
 mod gltf_conformance;
 mod gltf_doc;
 mod gltf_glass;
