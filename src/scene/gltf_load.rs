@@ -29,6 +29,10 @@
 //!   16-bit integers ([`super::gltf_quantized`]): normalized ones are
 //!   dequantized, others read as their values (the node's transform, or the
 //!   texture transform, scales them).
+//! - External files (buffers, images) are read from inside the asset root,
+//!   [`LoadOptions::asset_root`] or by default the scene file's folder:
+//!   `../buffers/x.bin` resolves against the scene's folder and may go
+//!   anywhere inside the root, nothing outside it ([`super::assets`]).
 
 use super::assets::AssetRoot;
 use super::gltf_quantized::read_f32_vectors;
