@@ -113,6 +113,26 @@ pub fn uniform_triangle(u: [f32; 2]) -> (f32, f32) {
     (1.0 - su, u[1] * su)
 }
 
+/// Uniform point on the unit disc, `(x, y)`, by Shirley and Chiu's
+/// concentric map: it keeps strata of `u` compact on the disc, where the
+/// polar map `(sqrt(u0), 2 pi u1)` stretches them into slivers.
+#[inline]
+pub fn concentric_disc(u: [f32; 2]) -> (f32, f32) {
+    let (a, b) = (2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    let (r, theta) = if a.abs() > b.abs() {
+        (a, std::f32::consts::FRAC_PI_4 * (b / a))
+    } else {
+        (
+            b,
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (a / b),
+        )
+    };
+    (r * theta.cos(), r * theta.sin())
+}
+
 /// Rec. 709 luminance weights of linear RGB: the one copy, for
 /// [`luminance`] and [`luminance_f64`].
 pub const LUMINANCE_WEIGHTS: [f64; 3] = [0.2126, 0.7152, 0.0722];
@@ -165,6 +185,30 @@ mod tests {
             let w = Vec3::new(0.2, 0.5, 0.3).normalize();
             assert!((f.local_from_world(f.world_from_local(w)) - w).length() < 1e-5);
         }
+    }
+
+    #[test]
+    fn the_concentric_disc_map_is_uniform_and_stays_inside() {
+        // A stratified grid: every quarter of the disc, by radius and by
+        // angle, gets its share of the points to within the grid's step.
+        let m = 200;
+        let (mut inner, mut upper, mut right) = (0, 0, 0);
+        for i in 0..m {
+            for j in 0..m {
+                let u = [(i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32];
+                let (x, y) = concentric_disc(u);
+                let r2 = x * x + y * y;
+                assert!(r2 <= 1.0 + 1e-6, "{u:?} -> ({x}, {y})");
+                inner += usize::from(r2 < 0.5);
+                upper += usize::from(y > 0.0);
+                right += usize::from(x > 0.0);
+            }
+        }
+        for (what, count) in [("r^2 < 1/2", inner), ("y > 0", upper), ("x > 0", right)] {
+            let share = count as f64 / (m * m) as f64;
+            assert!((share - 0.5).abs() < 0.01, "{what}: {share}");
+        }
+        assert_eq!(concentric_disc([0.5, 0.5]), (0.0, 0.0));
     }
 
     #[test]

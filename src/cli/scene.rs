@@ -21,6 +21,15 @@ pub struct SceneArgs {
     pub json: bool,
 }
 
+/// The axis of a spot light, the direction of travel of a directional one.
+fn direction_of(l: &Light) -> Option<glam::Vec3> {
+    match l {
+        Light::Spot(s) => Some(s.direction),
+        Light::Directional(d) => Some(d.direction()),
+        _ => None,
+    }
+}
+
 fn brdf_name(b: &Brdf) -> String {
     let rgb = |v: glam::Vec3| format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z);
     match b {
@@ -101,6 +110,10 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
                 "cosn": match l { Light::Area(a) => Some(a.emission.profile.exponent()), _ => None },
                 "two_sided": match l { Light::Area(a) => Some(a.emission.two_sided), _ => None },
                 "mesh": match l { Light::Area(a) => Some(scene.meshes()[a.mesh].name.clone()), _ => None },
+                "position": l.position().map(|p| [p.x, p.y, p.z]),
+                "direction": direction_of(l).map(|d| [d.x, d.y, d.z]),
+                "irradiance": match l { Light::Directional(d) => Some(d.irradiance().to_array()), _ => None },
+                "disc_radius": match l { Light::Directional(d) => Some(d.scene_radius()), _ => None },
             })
         })
         .collect();
@@ -168,10 +181,24 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
                     ""
                 }
             ),
+            Light::Directional(d) => {
+                let (w, e) = (d.direction(), d.irradiance());
+                format!(
+                    "direction ({:.4}, {:.4}, {:.4})  irradiance ({:.4e}, {:.4e}, {:.4e})  \
+                     disc radius {:.4}  (alpha_A = 1, alpha_D = alpha_min)",
+                    w.x,
+                    w.y,
+                    w.z,
+                    e.x,
+                    e.y,
+                    e.z,
+                    d.scene_radius()
+                )
+            }
             _ => "punctual (alpha_A = 1)".to_string(),
         };
         println!(
-            "  {:<6} power ({:.4e}, {:.4e}, {:.4e})  {extra}",
+            "  {:<11} power ({:.4e}, {:.4e}, {:.4e})  {extra}",
             l.kind(),
             p.x,
             p.y,

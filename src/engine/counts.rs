@@ -5,7 +5,9 @@
 //! - adaptive: `N_l = alpha_E * alpha_A * alpha_D * N_MAX` with `alpha_E = P_l / max P`,
 //!   `alpha_A = A_l / max A` (punctual lights: `alpha_A = 1`), `alpha_D` from the
 //!   directionality analysis of the emission profile (point lights: 1; spot lights:
-//!   the cone's solid angle over 2 pi, a uniform emitter restricted to the cone).
+//!   the cone's solid angle over 2 pi, a uniform emitter restricted to the cone;
+//!   directional lights: `alpha_min`, a delta in direction, which splitting at
+//!   emission cannot spread).
 //!
 //! In every mode a light with positive power emits at least one photon, unless
 //! `N_MAX = 0` (Q = 0), which means no photon at all.
@@ -85,6 +87,7 @@ pub fn plan_emission(
                     Light::Area(a) => cache.emitter(&a.emission.profile)?,
                     Light::Point(_) => 1.0,
                     Light::Spot(s) => (1.0 - s.cos_outer).clamp(cache.params().alpha_min, 1.0),
+                    Light::Directional(_) => cache.params().alpha_min,
                 };
                 let n = alpha_e as f64 * alpha_a as f64 * alpha_d as f64 * n_max as f64;
                 LightPlan {

@@ -11,13 +11,15 @@
 //! - **Lights chosen by contribution**: one light per shadow ray, with
 //!   probability proportional to an unoccluded estimate of its contribution
 //!   at the shading point (power-like weight `L(theta_l) cos_l cos_x A / r^2`
-//!   at the light's centre for area lights, `I cos_x / r^2` for punctual ones),
-//!   mixed with 10 % by power so that no light that can contribute gets a zero
+//!   at the light's centre for area lights, `I cos_x / r^2` for point and spot
+//!   lights, `E cos_x` for directional ones), mixed with 10 % by power so that no light that can contribute gets a zero
 //!   probability (the estimate is unbiased whatever the weights).
 //!
 //! Area light of radiance `L0 cos^n(theta_l)` (one-sided, about the
 //! triangle's geometric normal); point light `I cos(theta_x) / r^2`; spot
-//! light the same times its falloff.
+//! light the same times its falloff; directional light `E cos(theta_x)`,
+//! its shadow ray unbounded towards the light. Point, spot and directional
+//! lights are deltas: no BRDF sample finds them, so nothing else counts them.
 
 use crate::brdf::Brdf;
 use crate::raycast::{Ray, RayCaster};
@@ -112,22 +114,31 @@ impl<'a> LightSampler<'a> {
     /// Unoccluded contribution estimate of light `i` at `x` (normal `n`).
     fn weight(&self, i: usize, x: Vec3, n: Vec3) -> f32 {
         let t = &self.tables[i];
-        let d = t.centre - x;
-        let r2 = d.length_squared().max(1e-12);
-        let wi = d / r2.sqrt();
-        // A light straddling the tangent plane still counts: the cosines are
-        // floored, this is only a sampling weight.
-        let cos_x = wi.dot(n).max(0.05);
+        // Towards the light's centre: the unit direction, the squared
+        // distance and cos(theta_x). A light straddling the tangent plane
+        // still counts: the cosines are floored, this is only a sampling weight.
+        let toward_centre = || {
+            let d = t.centre - x;
+            let r2 = d.length_squared().max(1e-12);
+            let wi = d / r2.sqrt();
+            (wi, r2, wi.dot(n).max(0.05))
+        };
         match &self.scene.lights[i] {
             Light::Area(a) => {
+                let (wi, r2, cos_x) = toward_centre();
                 let cos_l = a.emission.facing((-wi).dot(t.normal)).max(0.05);
                 let le = luminance(a.emission.radiance) * a.emission.profile_toward(cos_l);
                 le * cos_l * cos_x * a.area / r2.max(a.area)
             }
-            Light::Point(p) => luminance(p.intensity) * cos_x / r2,
+            Light::Point(p) => {
+                let (_, r2, cos_x) = toward_centre();
+                luminance(p.intensity) * cos_x / r2
+            }
             Light::Spot(s) => {
+                let (wi, r2, cos_x) = toward_centre();
                 luminance(s.intensity) * s.falloff(s.direction.dot(-wi)).max(0.05) * cos_x / r2
             }
+            Light::Directional(d) => luminance(d.irradiance()) * (-d.direction()).dot(n).max(0.05),
         }
     }
 
@@ -156,10 +167,10 @@ impl<'a> LightSampler<'a> {
         None
     }
 
-    /// A point on light `i` from `u`: the point and `L G / pdf_area` arriving
-    /// at `x` (area lights), or `I / r^2` (punctual), before the BRDF,
-    /// `cos(theta_x)` and visibility.
-    fn sample_light(&self, i: usize, x: Vec3, u: [f32; 2]) -> Option<(Vec3, Vec3)> {
+    /// Where light `i` lights `x` from, by `u`, and what arrives: a point
+    /// and `L G / pdf_area` (area lights), or what [`punctual_arrival`]
+    /// gives, before the BRDF, `cos(theta_x)` and visibility.
+    fn sample_light(&self, i: usize, x: Vec3, u: [f32; 2]) -> Option<(Source, Vec3)> {
         match &self.scene.lights[i] {
             Light::Area(a) => {
                 let t = &self.tables[i];
@@ -180,7 +191,7 @@ impl<'a> LightSampler<'a> {
                     return None;
                 }
                 let le = a.emission.radiance_toward(cos_l);
-                Some((p, le * cos_l * a.area / r2))
+                Some((Source::At(p), le * cos_l * a.area / r2))
             }
             light => punctual_arrival(light, x),
         }
@@ -194,10 +205,10 @@ impl<'a> LightSampler<'a> {
         let Some((i, prob, u0)) = self.pick(x, n, u[0]) else {
             return Vec3::ZERO;
         };
-        let Some((p, le_g)) = self.sample_light(i, x, [u0, u[1]]) else {
+        let Some((source, le_g)) = self.sample_light(i, x, [u0, u[1]]) else {
             return Vec3::ZERO;
         };
-        let wi = (p - x).normalize_or_zero();
+        let wi = source.direction_from(x);
         let cos_x = wi.dot(n);
         if cos_x <= 0.0 || wi.dot(ng) <= 0.0 || le_g.max_element() <= 0.0 {
             return Vec3::ZERO;
@@ -207,22 +218,53 @@ impl<'a> LightSampler<'a> {
         if f.max_element() <= 0.0 {
             return Vec3::ZERO;
         }
-        if self.rt.occluded(&Ray::segment(x + ng * eps, p, SHADOW_EPS)) {
+        if self.rt.occluded(&source.shadow_ray(x + ng * eps)) {
             return Vec3::ZERO;
         }
         f * le_g * (cos_x / prob)
     }
 }
 
-/// A punctual light's position and `I / r^2` (times a spot's falloff)
-/// arriving at `x`, before `cos(theta_x)` and visibility; `None` for an area
-/// light, a point at the light, or outside a spot's cone.
-pub(super) fn punctual_arrival(light: &Light, x: Vec3) -> Option<(Vec3, Vec3)> {
+/// Where a light sample's light comes from, seen from a shading point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Source {
+    /// A point: on an area light, or a point or spot light's position.
+    At(Vec3),
+    /// Infinitely far along this unit direction: a directional light.
+    Along(Vec3),
+}
+
+impl Source {
+    /// Unit direction from `x` towards the light (zero when `x` is the point).
+    pub(crate) fn direction_from(self, x: Vec3) -> Vec3 {
+        match self {
+            Source::At(p) => (p - x).normalize_or_zero(),
+            Source::Along(w) => w,
+        }
+    }
+
+    /// The shadow ray from `origin` (already off the surface) to the light:
+    /// a segment stopping short of a point, unbounded towards a direction
+    /// (the light lies beyond all geometry).
+    pub(crate) fn shadow_ray(self, origin: Vec3) -> Ray {
+        match self {
+            Source::At(p) => Ray::segment(origin, p, SHADOW_EPS),
+            Source::Along(w) => Ray::new(origin, w),
+        }
+    }
+}
+
+/// Where a point, spot or directional light lights `x` from, and what
+/// arrives there before `cos(theta_x)` and visibility: `I / r^2` (times a
+/// spot's falloff), or a directional light's irradiance `E`; `None` for an
+/// area light, a point at the light, or outside a spot's cone.
+pub(crate) fn punctual_arrival(light: &Light, x: Vec3) -> Option<(Source, Vec3)> {
     match light {
         Light::Area(_) => None,
+        Light::Directional(d) => Some((Source::Along(-d.direction()), d.irradiance())),
         Light::Point(p) => {
             let r2 = (x - p.position).length_squared();
-            (r2 > 0.0).then(|| (p.position, p.intensity / r2))
+            (r2 > 0.0).then(|| (Source::At(p.position), p.intensity / r2))
         }
         Light::Spot(s) => {
             let d = x - s.position;
@@ -231,7 +273,7 @@ pub(super) fn punctual_arrival(light: &Light, x: Vec3) -> Option<(Vec3, Vec3)> {
                 return None;
             }
             let f = s.falloff(s.direction.dot(d) / r2.sqrt());
-            (f > 0.0).then(|| (s.position, s.intensity * f / r2))
+            (f > 0.0).then(|| (Source::At(s.position), s.intensity * f / r2))
         }
     }
 }

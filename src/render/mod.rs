@@ -31,7 +31,9 @@
 //! - the emission of an emitter the (possibly mirrored) ray reaches, `L0 cos^n`;
 //! - **direct light** at `x`: one sample per light and pixel sample (area
 //!   lights: an area-uniform point, the `cos^n` radiance, a shadow ray;
-//!   point and spot lights: their intensity over `r^2` and a shadow ray);
+//!   point and spot lights: their intensity over `r^2` and a shadow ray;
+//!   directional lights: their irradiance and a shadow ray unbounded
+//!   towards them);
 //! - **caustics** at `x` (`L S+ x`, light that came through mirrors and
 //!   glass only): the radiance estimate of the **caustic map** (the photons
 //!   flagged caustic by the tracer) with its own, narrower kernel

@@ -5,7 +5,10 @@
 //! From the camera, a path is followed surface to surface:
 //! - at every non-delta vertex, **next-event estimation**: one sample of
 //!   every light (area lights: an area-uniform point and a shadow ray; point
-//!   and spot lights: their intensity over `r^2`);
+//!   and spot lights: their intensity over `r^2`; directional lights: their
+//!   irradiance `E`, the shadow ray unbounded towards them). Point, spot and
+//!   directional lights are deltas that no BRDF sample can hit, so their
+//!   samples take no MIS weight and nothing counts them twice;
 //! - the next direction by the BRDF's own sampler; an emitter that this ray
 //!   reaches adds its emission. Area-light emission is counted by both
 //!   strategies, so both are weighted by **multiple importance sampling**

@@ -1,20 +1,18 @@
 //! Next-event estimation of the path tracer: one sample of every light from
 //! a surface point, area lights weighted against BRDF sampling by the power
-//! heuristic (see [`super::path`]).
+//! heuristic (see [`super::path`]). Point, spot and directional lights are
+//! deltas that no BRDF sample reaches: their samples count fully.
 
 // `!(x > 0.0)` is deliberate here: it rejects NaN with the non-positive values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::direct::{punctual_arrival, Source};
 use super::path::{power_heuristic, PathTracer};
 use crate::brdf::Brdf;
-use crate::raycast::Ray;
 use crate::rng::Rng;
 use crate::sampling::Frame;
 use crate::scene::Light;
 use glam::Vec3;
-
-/// Shadow rays stop this fraction of their length short of either end.
-const SHADOW_EPS: f32 = 1e-4;
 
 /// Solid-angle pdf, seen from `from`, of an area-uniform sample at `at` on a
 /// light of total area `area` whose cosine towards `from` is `cos_l`.
@@ -40,8 +38,9 @@ pub(super) fn next_event(
     let origin = x + n * pt.eps;
     let mut sum = Vec3::ZERO;
     for light in &pt.scene.lights {
-        // (light point, incoming radiance or intensity / r^2 over the pdf, MIS weight input)
-        let (p, li, pdf_l) = match light {
+        // (where the light comes from, incoming radiance or intensity / r^2
+        // over the pdf, MIS weight input)
+        let (source, li, pdf_l) = match light {
             Light::Area(a) => {
                 let e = a.sample(rng.next_f32(), rng.next_2d(), [0.5, 0.5]);
                 let Some(n_l) = e.normal else { continue };
@@ -56,26 +55,14 @@ pub(super) fn next_event(
                 }
                 let le = a.emission.radiance_toward(cos_l);
                 let pdf = area_light_pdf(x, e.origin, cos_l, a.area);
-                (e.origin, le / pdf, Some(pdf))
+                (Source::At(e.origin), le / pdf, Some(pdf))
             }
-            Light::Point(p) => {
-                let r2 = (x - p.position).length_squared();
-                if !(r2 > 0.0) {
-                    continue;
-                }
-                (p.position, p.intensity / r2, None)
-            }
-            Light::Spot(s) => {
-                let d = x - s.position;
-                let r2 = d.length_squared();
-                if !(r2 > 0.0) {
-                    continue;
-                }
-                let f = s.falloff(s.direction.dot(d) / r2.sqrt());
-                (s.position, s.intensity * f / r2, None)
-            }
+            delta => match punctual_arrival(delta, x) {
+                Some((source, li)) => (source, li, None),
+                None => continue,
+            },
         };
-        let wi = (p - x).normalize_or_zero();
+        let wi = source.direction_from(x);
         let cos_x = wi.dot(n);
         if cos_x <= 0.0 || !(li.max_element() > 0.0) {
             continue;
@@ -85,7 +72,7 @@ pub(super) fn next_event(
         if !(f.max_element() > 0.0) {
             continue;
         }
-        if pt.rt.occluded(&Ray::segment(origin, p, SHADOW_EPS)) {
+        if pt.rt.occluded(&source.shadow_ray(origin)) {
             continue;
         }
         let w = match pdf_l {

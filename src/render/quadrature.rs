@@ -5,16 +5,17 @@
 //! geometric normal): irradiance at `x` with normal `n_x`
 //! `E(x) = integral L0 cos^n(theta_l) cos(theta_l) cos(theta_x) / r^2 V dA`.
 //! Point light of intensity `I`: `I cos(theta_x) / r^2 V`; spot light: the same
-//! times its falloff (the smoothstep of [`crate::scene::SpotLight`]).
+//! times its falloff (the smoothstep of [`crate::scene::SpotLight`]);
+//! directional light of irradiance `E`: `E cos(theta_x) V`.
 
-use super::direct::{punctual_arrival, SHADOW_EPS};
-use crate::raycast::{Ray, RayCaster};
+use super::direct::{punctual_arrival, Source};
+use crate::raycast::RayCaster;
 use crate::scene::{Light, PreparedScene, Scene, SurfacePoint};
 use glam::Vec3;
 
 /// Direct irradiance at `x` (normal `n`) by a midpoint rule: every area-light
 /// triangle cut into `grid^2` similar sub-triangles, each sampled at its
-/// centroid; punctual lights exactly. Every node traces a shadow ray with
+/// centroid; point, spot and directional lights exactly. Every node traces a shadow ray with
 /// the caster of `prepared`.
 pub fn quadrature_irradiance<C: RayCaster>(
     prepared: &PreparedScene<C>,
@@ -36,8 +37,8 @@ fn quadrature(scene: &Scene, rt: Option<&dyn RayCaster>, x: Vec3, n: Vec3, grid:
     let grid = grid.max(1);
     let eps = super::ray_epsilon(scene);
     let origin = x + n * eps;
-    let visible = |p: Vec3| match rt {
-        Some(rt) => !rt.occluded(&Ray::segment(origin, p, SHADOW_EPS)),
+    let visible = |source: Source| match rt {
+        Some(rt) => !rt.occluded(&source.shadow_ray(origin)),
         None => true,
     };
     let mut e = Vec3::ZERO;
@@ -69,7 +70,7 @@ fn quadrature(scene: &Scene, rt: Option<&dyn RayCaster>, x: Vec3, n: Vec3, grid:
                                 let r = r2.sqrt();
                                 let cos_l = a.emission.facing(n_l.dot(d) / r);
                                 let cos_x = -n.dot(d) / r;
-                                if cos_l <= 0.0 || cos_x <= 0.0 || !visible(p) {
+                                if cos_l <= 0.0 || cos_x <= 0.0 || !visible(Source::At(p)) {
                                     continue;
                                 }
                                 let le = a.emission.profile_toward(cos_l);
@@ -79,10 +80,10 @@ fn quadrature(scene: &Scene, rt: Option<&dyn RayCaster>, x: Vec3, n: Vec3, grid:
                     }
                 }
             }
-            Light::Point(_) | Light::Spot(_) => {
-                if let Some((p, ig)) = punctual_arrival(light, x) {
-                    let cos_x = (p - x).normalize_or_zero().dot(n);
-                    if cos_x > 0.0 && visible(p) {
+            Light::Point(_) | Light::Spot(_) | Light::Directional(_) => {
+                if let Some((source, ig)) = punctual_arrival(light, x) {
+                    let cos_x = source.direction_from(x).dot(n);
+                    if cos_x > 0.0 && visible(source) {
                         e += ig * cos_x;
                     }
                 }

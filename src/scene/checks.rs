@@ -4,7 +4,7 @@
 //! beyond [`crate::raycast::EMBREE_LARGE`]), every derived quantity (areas,
 //! powers, directions) finite.
 
-use super::{AreaLight, Camera, Emission, Light, Material, Mesh};
+use super::{AreaLight, Camera, DirectionalLight, Emission, Light, Material, Mesh};
 use crate::error::{Error, Result};
 use crate::raycast::EMBREE_LARGE;
 use crate::sampling::luminance;
@@ -154,6 +154,7 @@ pub(super) fn check_punctual(light: &Light) -> Result<()> {
                 a.mesh
             )))
         }
+        Light::Directional(d) => return check_directional(d),
         Light::Point(p) => (p.position, p.intensity),
         Light::Spot(s) => {
             let unit = s.direction.is_finite() && (s.direction.length() - 1.0).abs() < 1e-3;
@@ -193,6 +194,40 @@ pub(super) fn check_punctual(light: &Light) -> Result<()> {
             light.kind(),
             sci(intensity)
         )));
+    }
+    Ok(())
+}
+
+/// A directional light's own values. Its power depends on the scene's
+/// bounds, which may still grow: [`check_directional_powers`] checks it
+/// once the scene is complete.
+fn check_directional(d: &DirectionalLight) -> Result<()> {
+    let dir = d.direction();
+    if !(dir.is_finite() && (dir.length() - 1.0).abs() < 1e-3) {
+        return Err(bad(format!(
+            "directional light direction {dir} is not finite and non-zero (a zero scale on its node?)"
+        )));
+    }
+    let e = d.irradiance();
+    if !e.is_finite() || e.min_element() < 0.0 {
+        return Err(bad(format!(
+            "directional light irradiance {e} is negative or not finite"
+        )));
+    }
+    Ok(())
+}
+
+/// Every directional light's power `E pi r^2` for the scene's final bounds.
+pub(super) fn check_directional_powers(lights: &[Light]) -> Result<()> {
+    for (i, l) in lights.iter().enumerate() {
+        let Light::Directional(d) = l else { continue };
+        if let Some(why) = power_problem(d.power()) {
+            return Err(bad(format!(
+                "directional light {i} of irradiance {} over the scene's bounding radius {:e}: {why}",
+                sci(d.irradiance()),
+                d.scene_radius()
+            )));
+        }
     }
     Ok(())
 }

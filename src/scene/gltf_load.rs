@@ -13,8 +13,11 @@
 //!   points and lines are skipped with a [`Scene::warnings`] entry naming them.
 //! - A primitive without a material gets the specification's default: a white
 //!   metal of roughness 1.
-//! - `KHR_lights_punctual` point and spot lights are read; directional lights are
-//!   rejected (they have no position to emit from).
+//! - `KHR_lights_punctual` point, spot and directional lights are read,
+//!   `color * intensity` taken as radiometric (candela as W/sr, lux as
+//!   W/m^2, no photometric factor). A directional light shines along its
+//!   node's -Z axis; its photon disc is fitted to the scene's bounds by
+//!   [`Scene`] as meshes are added, not here (later nodes may add geometry).
 //! - The first perspective camera found becomes [`Scene::camera`].
 //! - Materials map to BRDFs by [`crate::brdf::gltf_map::from_gltf_material`]:
 //!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_transmission`
@@ -36,7 +39,7 @@
 
 use super::assets::AssetRoot;
 use super::gltf_quantized::read_f32_vectors;
-use super::{Camera, Emission, Light, Material, PointLight, Scene, SpotLight};
+use super::{Camera, DirectionalLight, Emission, Light, Material, PointLight, Scene, SpotLight};
 use crate::brdf::gltf_map::{from_gltf_material, GltfMaterial, GltfVolume};
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
@@ -356,9 +359,10 @@ fn convert_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Resu
                 cos_outer: outer.cos(),
             }))
         }
-        Kind::Directional => Err(Error::InvalidScene(format!(
-            "light `{}` is directional; only point and spot lights are supported",
-            light.name().unwrap_or("?")
+        // A zero scale leaves no direction: refused by Scene::add_light.
+        Kind::Directional => Ok(Light::Directional(DirectionalLight::new(
+            world.transform_vector3(-Vec3::Z),
+            intensity,
         ))),
     }
 }

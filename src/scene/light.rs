@@ -8,10 +8,13 @@
 //!   cone, a smooth falloff to the outer cone; power
 //!   `2 pi I (1 - (cos_inner + cos_outer) / 2)` (pbrt-v4's approximation of the
 //!   smoothstep falloff, exact for a linear one).
+//! - [`DirectionalLight`] (`super::directional`): `KHR_lights_punctual`
+//!   directional, Blender's Sun: irradiance `E` from one direction, power
+//!   `E pi r^2` through a disc of the scene's bounding radius `r`.
 //!
 //! Punctual lights have no area: the adaptive mode uses `alpha_A = 1` for them.
 
-use super::{triangle_area, Emission, Mesh};
+use super::{triangle_area, DirectionalLight, Emission, Mesh};
 use crate::emitter::CosN;
 use crate::sampling::{spherical_direction, uniform_triangle, Frame};
 use glam::Vec3;
@@ -201,6 +204,8 @@ pub enum Light {
     Point(PointLight),
     /// A spot light.
     Spot(SpotLight),
+    /// A directional light (the Sun).
+    Directional(DirectionalLight),
 }
 
 impl Light {
@@ -210,6 +215,7 @@ impl Light {
             Light::Area(a) => a.power(),
             Light::Point(p) => p.intensity * 4.0 * PI,
             Light::Spot(s) => s.intensity * 2.0 * PI * (1.0 - 0.5 * (s.cos_inner + s.cos_outer)),
+            Light::Directional(d) => d.power(),
         }
     }
 
@@ -221,10 +227,10 @@ impl Light {
         }
     }
 
-    /// Position of a punctual light.
+    /// Position of a point or spot light (area and directional lights have none).
     pub fn position(&self) -> Option<Vec3> {
         match self {
-            Light::Area(_) => None,
+            Light::Area(_) | Light::Directional(_) => None,
             Light::Point(p) => Some(p.position),
             Light::Spot(s) => Some(s.position),
         }
@@ -236,11 +242,13 @@ impl Light {
             Light::Area(_) => "area",
             Light::Point(_) => "point",
             Light::Spot(_) => "spot",
+            Light::Directional(_) => "directional",
         }
     }
 
     /// Samples an emitted photon: `u_sel` picks the triangle of an area light,
-    /// `u_pos` the point on it, `u_dir` the direction.
+    /// `u_pos` the point on it (on a directional light's disc), `u_dir` the
+    /// direction.
     #[inline]
     pub fn sample(&self, u_sel: f32, u_pos: [f32; 2], u_dir: [f32; 2]) -> EmittedPhoton {
         match self {
@@ -254,6 +262,7 @@ impl Light {
                 normal: None,
                 weight: Vec3::ONE,
             },
+            Light::Directional(d) => d.sample(u_pos),
             Light::Spot(s) => {
                 // Uniform in the outer cone, weighted by the falloff.
                 let cos_t = 1.0 - u_dir[0] * (1.0 - s.cos_outer);

@@ -1,5 +1,6 @@
 //! The scene model: triangle meshes with a material each, area lights made of
-//! emissive meshes with a `cos^n` profile, punctual lights, and an optional camera.
+//! emissive meshes with a `cos^n` profile, punctual lights (point, spot and
+//! directional), and an optional camera.
 //!
 //! Scenes come from glTF 2.0 files (`Scene::load`), from the built-in Cornell box
 //! (`Scene::cornell`; both with the feature `gltf`), or are assembled in code
@@ -14,6 +15,7 @@ mod buffers;
 mod checks;
 #[cfg(feature = "gltf")]
 mod cornell;
+mod directional;
 #[cfg(feature = "gltf")]
 pub mod gltf_checks;
 #[cfg(feature = "gltf")]
@@ -44,6 +46,7 @@ pub use gltf_images::MAX_TEXELS;
 #[cfg(feature = "gltf")]
 pub use gltf_load::LoadOptions;
 
+pub use directional::DirectionalLight;
 pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
 pub use prepared::PreparedScene;
 pub use surface::{consistent_with_geometry, SurfacePoint, SurfaceSampler};
@@ -301,6 +304,23 @@ pub struct Scene {
     pub(crate) textures: Vec<Texture>,
     /// Per material, its textures (`None`, or past the end: untextured).
     pub(crate) material_maps: Vec<Option<MaterialMaps>>,
+    /// Bounds of every kept triangle's vertices, `None` before the first
+    /// mesh: kept as meshes are added, so that directional lights can be
+    /// refitted to it without a pass over all the geometry.
+    pub(crate) geometry_bounds: Option<(Vec3, Vec3)>,
+}
+
+/// `bounds` grown by the vertices of `mesh`'s triangles.
+fn mesh_bounds(mesh: &Mesh, bounds: Option<(Vec3, Vec3)>) -> (Vec3, Vec3) {
+    let start = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    let (mut lo, mut hi) = bounds.unwrap_or(start);
+    for t in &mesh.indices {
+        for &i in t {
+            lo = lo.min(mesh.positions[i as usize]);
+            hi = hi.max(mesh.positions[i as usize]);
+        }
+    }
+    (lo, hi)
 }
 
 /// Area of a triangle.
@@ -466,11 +486,24 @@ impl Scene {
         };
         self.skipped_degenerate += dropped;
         self.source_triangles.push(source.map(|s| s.kept));
+        self.geometry_bounds = Some(mesh_bounds(&mesh, self.geometry_bounds));
         self.meshes.push(mesh);
         if let Some(light) = light {
             self.lights.push(Light::Area(light));
         }
+        self.fit_directional_lights();
         Ok(self.meshes.len() - 1)
+    }
+
+    /// Gives every directional light the disc of the geometry as it is now:
+    /// called whenever a mesh or a light is added, so no disc is stale.
+    fn fit_directional_lights(&mut self) {
+        let bounds = self.geometry_bounds;
+        for l in &mut self.lights {
+            if let Light::Directional(d) = l {
+                d.fit(bounds);
+            }
+        }
     }
 
     /// Gives mesh `mesh` per-vertex shading normals (one per vertex; they are
@@ -502,16 +535,22 @@ impl Scene {
         Ok(())
     }
 
-    /// Adds a punctual light and returns its index in [`Scene::lights`].
+    /// Adds a punctual light (point, spot or directional) and returns its
+    /// index in [`Scene::lights`]. A directional light's photon disc is
+    /// fitted to the scene's geometry, now and whenever a mesh is added
+    /// later; its power, which depends on that disc, is checked by
+    /// [`Scene::validate`].
     ///
     /// # Errors
     /// [`Error::InvalidScene`] for a position that is not finite or beyond
-    /// [`MAX_COORDINATE`], a spot axis that is not a unit vector, cone cosines
-    /// out of order, a negative or non-finite intensity, or a power that
-    /// overflows. Area lights come from [`Scene::add_mesh`] only.
+    /// [`MAX_COORDINATE`], a spot axis or a directional light's direction that
+    /// is not finite and non-zero, cone cosines out of order, a negative or
+    /// non-finite intensity or irradiance, or a power that overflows. Area
+    /// lights come from [`Scene::add_mesh`] only.
     pub fn add_light(&mut self, light: Light) -> Result<usize> {
         checks::check_punctual(&light)?;
         self.lights.push(light);
+        self.fit_directional_lights();
         Ok(self.lights.len() - 1)
     }
 
@@ -610,18 +649,12 @@ impl Scene {
         self.meshes.iter().map(|m| m.indices.len()).sum()
     }
 
-    /// Axis-aligned bounds of all meshes (and punctual light positions).
+    /// Axis-aligned bounds of all meshes (and point and spot light positions);
+    /// `lo` infinite and above `hi` when the scene is empty.
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for m in &self.meshes {
-            for t in &m.indices {
-                for &i in t {
-                    lo = lo.min(m.positions[i as usize]);
-                    hi = hi.max(m.positions[i as usize]);
-                }
-            }
-        }
+        let (mut lo, mut hi) = self
+            .geometry_bounds
+            .unwrap_or((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)));
         for l in &self.lights {
             if let Some(p) = l.position() {
                 lo = lo.min(p);
@@ -634,9 +667,11 @@ impl Scene {
     /// Checks the scene can be traced and rendered.
     ///
     /// # Errors
-    /// [`Error::InvalidScene`] when it has no light or no triangle, when
-    /// the lights' total power is above [`MAX_LIGHT_POWER`] in some
-    /// channel, or when every light is dark.
+    /// [`Error::InvalidScene`] when it has no light or no triangle (a
+    /// directional light without geometry has no bounds to emit across),
+    /// when a directional light's power is unusable, when the lights' total
+    /// power is above [`MAX_LIGHT_POWER`] in some channel, or when every
+    /// light is dark.
     pub fn validate(&self) -> Result<()> {
         if self.lights.is_empty() {
             return Err(Error::InvalidScene(
@@ -646,9 +681,20 @@ impl Scene {
             ));
         }
         if self.triangle_count() == 0 {
-            return Err(Error::InvalidScene("the scene has no triangle".into()));
+            let directional = self
+                .lights
+                .iter()
+                .any(|l| matches!(l, Light::Directional(_)));
+            return Err(Error::InvalidScene(if directional {
+                "the scene has a directional light but no triangle: with no bounds there is \
+                 nowhere to send its photons from (add geometry for it to light)"
+                    .into()
+            } else {
+                "the scene has no triangle".into()
+            }));
         }
         self.check_texcoords()?;
+        checks::check_directional_powers(&self.lights)?;
         // In f64: forty lights of 1e37 W each summed to infinity in f32.
         let total = self.lights.iter().fold([0.0f64; 3], |mut t, l| {
             let p = l.power();

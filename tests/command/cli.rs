@@ -36,6 +36,31 @@ fn scene_json_lists_triangles_and_lights() {
 }
 
 #[test]
+fn scene_json_shows_a_directional_light() {
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/sun_floor.gltf");
+    let v = json(&["scene", file, "--json"]);
+    let sun = &v["lights"][0];
+    assert_eq!(sun["kind"], "directional");
+    let d: Vec<f64> = serde_json::from_value(sun["direction"].clone()).unwrap();
+    let t = 30f64.to_radians();
+    let want = [0.0, -t.cos(), -t.sin()];
+    assert!(
+        d.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6),
+        "{d:?}"
+    );
+    assert_eq!(sun["irradiance"].as_array().unwrap().len(), 3);
+    let r = sun["disc_radius"].as_f64().unwrap();
+    assert!((r - 2.5625f64.sqrt()).abs() < 1e-5, "{r}");
+    assert_eq!(sun["area"], Value::Null);
+    let (code, text, err) = run(&["scene", file]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.contains("directional") && text.contains("disc radius 1.6008"),
+        "{text}"
+    );
+}
+
+#[test]
 fn trace_json_has_every_documented_key() {
     let v = json(&[
         "trace", "cornell", "--mode", "adaptive", "--n-max", "3000", "--cosn", "20", "--json",

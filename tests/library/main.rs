@@ -16,6 +16,7 @@ mod brdf_models;
 mod cornell_empty;
 mod cornell_rays;
 mod dielectric;
+mod directional_light;
 mod embree_wrapper;
 mod engine;
 mod fixtures;
