@@ -12,7 +12,9 @@ use adaptive_pm::analysis::{
 };
 use adaptive_pm::brdf::{Brdf, CookTorrance, GltfPbr, Lambert, Mirror, Phong};
 use adaptive_pm::emitter::CosN;
-use adaptive_pm::scene::{Light, Scene};
+use adaptive_pm::scene::{Light, LoadOptions, Scene};
+
+use super::common::AssetRootArgs;
 use anyhow::{bail, Context};
 use glam::Vec3;
 
@@ -22,6 +24,8 @@ pub struct AnalyzeArgs {
     /// A scene (glTF path, or a built-in: `cornell`, `cornell-empty`,
     /// `cornell-glass`) whose emitters and BRDFs to analyse.
     pub scene: Option<String>,
+    #[command(flatten)]
+    pub assets: AssetRootArgs,
     /// `cos^n` emitters to analyse, by exponent.
     #[arg(long, value_delimiter = ',')]
     pub cosn: Vec<f32>,
@@ -110,11 +114,12 @@ fn brdf_row(
 /// distinct BRDF that some mesh carries (nothing the scene does not use).
 fn scene_rows(
     name: &str,
+    options: &LoadOptions,
     est: Estimator,
     p: &AnalysisParams,
     rows: &mut Vec<Row>,
 ) -> anyhow::Result<()> {
-    let scene = Scene::open(name).with_context(|| format!("scene `{name}`"))?;
+    let scene = Scene::open_with(name, options).with_context(|| format!("scene `{name}`"))?;
     let mut seen = std::collections::HashSet::new();
     for l in scene.lights() {
         if let Light::Area(a) = l {
@@ -147,7 +152,7 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
     let p = AnalysisParams::default();
     let mut rows = Vec::new();
     if let Some(name) = &args.scene {
-        scene_rows(name, est, &p, &mut rows)?;
+        scene_rows(name, &args.assets.options(), est, &p, &mut rows)?;
     }
     for &n in &args.cosn {
         rows.push(emitter_row(&CosN::new(n)?, est, &p)?);

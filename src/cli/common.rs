@@ -6,10 +6,11 @@ use adaptive_pm::emitter::CosN;
 use adaptive_pm::engine::config::{DEFAULT_MAX_DEPTH, DEFAULT_SPLIT_CAP};
 use adaptive_pm::engine::{Budget, Mode, TraceConfig};
 use adaptive_pm::isa::Isa;
-use adaptive_pm::scene::Scene;
+use adaptive_pm::scene::{LoadOptions, Scene};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
+use std::path::PathBuf;
 
 /// The flags that make a run's [`TraceConfig`] (its photon budget, seed,
 /// depth, split cap, memory and estimator), and the `--cosn` override of the
@@ -134,9 +135,32 @@ impl EmbreeArgs {
     }
 }
 
-/// Opens a scene by name or path, with an optional cos^n override.
-pub fn open_scene(name: &str, cosn: Option<f32>) -> anyhow::Result<Scene> {
-    let mut scene = Scene::open(name).with_context(|| format!("scene `{name}`"))?;
+/// Where a glTF scene's external files may be read from.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct AssetRootArgs {
+    /// Folder the scene's buffers and images may be read from, anywhere
+    /// inside it (`../buffers/x.bin`, through symbolic links too), nothing
+    /// outside it; it must hold the scene file. Default: the scene file's
+    /// folder.
+    #[arg(long, value_name = "DIR")]
+    pub asset_root: Option<PathBuf>,
+}
+
+impl AssetRootArgs {
+    /// The load options of these flags.
+    pub fn options(&self) -> LoadOptions {
+        match &self.asset_root {
+            Some(dir) => LoadOptions::default().with_asset_root(dir),
+            None => LoadOptions::default(),
+        }
+    }
+}
+
+/// Opens a scene by name or path, with its assets' root and an optional
+/// cos^n override, and prints its warnings.
+pub fn open_scene(name: &str, assets: &AssetRootArgs, cosn: Option<f32>) -> anyhow::Result<Scene> {
+    let mut scene =
+        Scene::open_with(name, &assets.options()).with_context(|| format!("scene `{name}`"))?;
     for w in scene.warnings() {
         eprintln!("warning: scene `{name}`: {w}");
     }

@@ -1,7 +1,9 @@
 //! `adaptive-pm render <SCENE> --mode M (--quality Q | --n-max N) --out image.exr`:
 //! trace photons, build the maps, render an image (see `adaptive_pm::render`).
 
-use super::common::{open_scene, progress_bar, EmbreeArgs, ThreadArgs, TraceConfigArgs};
+use super::common::{
+    open_scene, progress_bar, AssetRootArgs, EmbreeArgs, ThreadArgs, TraceConfigArgs,
+};
 use adaptive_pm::embree::EmbreeScene;
 use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
 use adaptive_pm::output::refuse_overwrite;
@@ -23,6 +25,8 @@ pub struct RenderArgs {
     /// box), `cornell-empty` (without its blocks), `cornell-glass` (with a mirror
     /// and a glass sphere instead).
     pub scene: String,
+    #[command(flatten)]
+    pub assets: AssetRootArgs,
     /// classic (Markov chains), density (density control) or adaptive (the paper).
     #[arg(long, default_value = "adaptive")]
     pub mode: Mode,
@@ -94,7 +98,7 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
-    let scene = open_scene(&args.scene, args.budget.cosn)?;
+    let scene = open_scene(&args.scene, &args.assets, args.budget.cosn)?;
     let trace_cfg = args.budget.config(args.mode)?;
     let cfg = render_config(&args)?;
     check_outputs(&args)?;

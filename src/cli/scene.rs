@@ -5,6 +5,8 @@ use adaptive_pm::sampling::luminance;
 use adaptive_pm::scene::{Light, Scene};
 use serde_json::json;
 
+use super::common::AssetRootArgs;
+
 /// Arguments of `scene`.
 #[derive(clap::Args, Debug)]
 pub struct SceneArgs {
@@ -12,6 +14,8 @@ pub struct SceneArgs {
     /// box), `cornell-empty` (without its blocks), `cornell-glass` (with a mirror
     /// and a glass sphere instead).
     pub scene: String,
+    #[command(flatten)]
+    pub assets: AssetRootArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -91,7 +95,7 @@ fn textures_note(scene: &Scene, material: usize) -> String {
 }
 
 pub fn run(args: SceneArgs) -> anyhow::Result<()> {
-    let scene = Scene::open(&args.scene)?;
+    let scene = Scene::open_with(&args.scene, &args.assets.options())?;
     let (lo, hi) = scene.bounds();
     let lights: Vec<_> = scene
         .lights()

@@ -1,7 +1,9 @@
 //! `adaptive-pm trace <SCENE> --mode M (--quality Q | --n-max N)`: one run of
 //! the engine, its counts, its maps' density statistics and timings.
 
-use super::common::{open_scene, progress_bar, EmbreeArgs, ThreadArgs, TraceConfigArgs};
+use super::common::{
+    open_scene, progress_bar, AssetRootArgs, EmbreeArgs, ThreadArgs, TraceConfigArgs,
+};
 use adaptive_pm::engine::counts::LightPlan;
 use adaptive_pm::engine::{density_points, map_density, primary_density};
 use adaptive_pm::engine::{Mode, TraceConfig, TraceReport, Tracer};
@@ -15,6 +17,8 @@ pub struct TraceArgs {
     /// box), `cornell-empty` (without its blocks), `cornell-glass` (with a mirror
     /// and a glass sphere instead).
     pub scene: String,
+    #[command(flatten)]
+    pub assets: AssetRootArgs,
     /// classic (Markov chains), density (density control) or adaptive (the paper).
     #[arg(long, default_value = "adaptive")]
     pub mode: Mode,
@@ -34,7 +38,7 @@ pub struct TraceArgs {
 pub fn run(args: TraceArgs) -> anyhow::Result<()> {
     // Fail before any work: an --out that cannot be written, or is the scene.
     args.shard.check_out(std::path::Path::new(&args.scene))?;
-    let scene = open_scene(&args.scene, args.settings.cosn)?;
+    let scene = open_scene(&args.scene, &args.assets, args.settings.cosn)?;
     let mut cfg: TraceConfig = args.settings.config(args.mode)?;
     cfg.shard = args.shard.resolve()?;
     cfg.validate()?;

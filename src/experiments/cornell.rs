@@ -46,6 +46,9 @@ pub struct CornellConfig {
     /// The scene: a built-in name ([`crate::scene::builtin_names`]) or a glTF
     /// path; it must have exactly one area light.
     pub scene: String,
+    /// The folder a glTF scene's external files may be read from (`None`:
+    /// the scene file's folder; see [`crate::scene::LoadOptions`]).
+    pub asset_root: Option<std::path::PathBuf>,
     /// Light exponents, in the order they are run (see [`super::sweep::parse_sweep`]).
     pub n_values: Vec<f64>,
     /// `N_MAX` of every run (the paper: 100 000).
@@ -104,6 +107,7 @@ impl CornellConfig {
     pub fn paper() -> Self {
         CornellConfig {
             scene: crate::scene::BUILTIN_CORNELL_EMPTY.to_string(),
+            asset_root: None,
             n_values: (1..=200).map(f64::from).collect(),
             n_max: crate::engine::config::PAPER_N_MAX,
             modes: Mode::ALL.to_vec(),
@@ -131,6 +135,13 @@ impl CornellConfig {
             CosN::new(n as f32)?;
         }
         self.trace_config(Mode::Classic).validate()
+    }
+
+    /// How the sweep's scene file is loaded.
+    pub fn load_options(&self) -> crate::scene::LoadOptions {
+        crate::scene::LoadOptions {
+            asset_root: self.asset_root.clone(),
+        }
     }
 
     fn trace_config(&self, mode: Mode) -> TraceConfig {
@@ -408,7 +419,7 @@ fn run_one(
 /// The sweep's scene: exactly one light, an area light (the one whose
 /// exponent the sweep varies).
 fn sweep_scene(cfg: &CornellConfig) -> Result<Scene> {
-    let scene = Scene::open(&cfg.scene)?;
+    let scene = Scene::open_with(&cfg.scene, &cfg.load_options())?;
     let area_lights = scene
         .lights()
         .iter()

@@ -68,11 +68,12 @@ pub(super) fn multiplicity(t: Type) -> u64 {
     }
 }
 
-/// The extensions a file may require: the six the loader reads, and two
+/// The extensions a file may require: the seven the loader reads, and two
 /// texture formats, whose textures (with no PNG or JPEG `source`) cannot be
 /// part of a valid file the loader accepts anyway.
-const SUPPORTED_REQUIRED: [&str; 8] = [
+const SUPPORTED_REQUIRED: [&str; 9] = [
     "KHR_lights_punctual",
+    super::gltf_quantized::KHR_MESH_QUANTIZATION,
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_transmission",
@@ -191,18 +192,10 @@ fn check_mesh(root: &Root, i: usize, m: &json::Mesh) -> Result<()> {
                 a,
                 root.accessors.len(),
             )?;
+            super::gltf_quantized::check_attribute(root, sem, ai)
+                .map_err(|why| bad(format!("{here}: {why}")))?;
             if *sem == json::mesh::Semantic::Positions {
                 let acc = &root.accessors[ai];
-                let ok = matches!(
-                    acc.component_type,
-                    Checked::Valid(json::accessor::GenericComponentType(ComponentType::F32))
-                ) && acc.type_ == Checked::Valid(Type::Vec3);
-                if !ok {
-                    return Err(bad(format!(
-                        "{here}: its POSITION {} is not a float VEC3",
-                        label("accessor", ai, acc.name.as_deref())
-                    )));
-                }
                 if acc.min.is_none() || acc.max.is_none() {
                     return Err(bad(format!(
                         "{here}: its POSITION {} has no min and max (glTF 2.0 requires both)",

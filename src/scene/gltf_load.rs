@@ -28,50 +28,82 @@
 //!   ([`super::gltf_textures`], [`super::textured`]); emissive and normal
 //!   textures and `alphaMode` are named in [`Scene::warnings`], not modelled.
 //! - `NORMAL` gives smooth shading normals ([`Scene::set_vertex_normals`]).
+//! - `KHR_mesh_quantization`: POSITION, NORMAL and TEXCOORD_n may be 8- or
+//!   16-bit integers ([`super::gltf_quantized`]): normalized ones are
+//!   dequantized, others read as their values (the node's transform, or the
+//!   texture transform, scales them).
+//! - External files (buffers, images) are read from inside the asset root,
+//!   [`LoadOptions::asset_root`] or by default the scene file's folder:
+//!   `../buffers/x.bin` resolves against the scene's folder and may go
+//!   anywhere inside the root, nothing outside it ([`super::assets`]).
 
+use super::assets::AssetRoot;
+use super::gltf_quantized::read_f32_vectors;
 use super::{Camera, DirectionalLight, Emission, Light, Material, PointLight, Scene, SpotLight};
 use crate::brdf::gltf_map::{from_gltf_material, GltfMaterial, GltfVolume};
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec3};
-use std::path::Path;
+use gltf::mesh::Semantic;
+use std::path::{Path, PathBuf};
 
-pub(super) fn load_path(path: &Path) -> Result<Scene> {
+/// How [`Scene::load_with`] reads a glTF file.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct LoadOptions {
+    /// The folder the scene's external files (buffers, images) may be read
+    /// from, anywhere inside it (`../buffers/x.bin`); it must hold the scene
+    /// file's folder. `None`: the scene file's folder.
+    pub asset_root: Option<PathBuf>,
+}
+
+impl LoadOptions {
+    /// These options with `dir` as the asset root.
+    pub fn with_asset_root(mut self, dir: impl Into<PathBuf>) -> Self {
+        self.asset_root = Some(dir.into());
+        self
+    }
+}
+
+pub(super) fn load_path(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let load_err = |e: Box<dyn std::error::Error + Send + Sync>| Error::Load {
         path: path.to_path_buf(),
         source: e,
     };
+    // Before the scene is read: a scene outside its root is refused unread.
+    let assets = AssetRoot::of_scene(path, options.asset_root.as_deref())?;
     // A scene file holds at most the buffers' 1 GiB limit, base64-encoded
     // (4/3 larger) in `data:` URIs, plus its JSON: 2 GiB is ample. Only a
     // regular file is read (a FIFO would block, `/dev/zero` never ends).
     const MAX_SCENE_FILE_BYTES: u64 = 2 << 30;
     let bytes = crate::input::read_regular_file(path, MAX_SCENE_FILE_BYTES)?;
-    let base = path.parent().unwrap_or(Path::new("."));
-    load_slice(&bytes, Some(base)).map_err(|e| match e {
+    load_slice(&bytes, Some(&assets)).map_err(|e| match e {
         Error::Load { source, .. } => load_err(source),
         other => other,
     })
 }
 
-/// Loads from bytes; `base` resolves relative buffer URIs (none when `None`).
+/// Loads from bytes; `assets` is where external files may be read (none
+/// when `None`: a scene in memory).
 ///
 /// Order matters: the JSON is validated ([`super::gltf_checks`]) before any of
 /// the gltf crate's panicking accessors is called, buffers are loaded by
-/// [`super::buffers`] (never outside `base`), and byte ranges are checked
+/// [`super::buffers`] (never outside the asset root), and byte ranges are checked
 /// ([`super::gltf_data`]) and the node graph bounded ([`super::gltf_graph`])
 /// before any accessor is read or any node expanded.
-pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
+pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Scene> {
+    // load_path puts the scene file's path in these.
     let wrap = |e: gltf::Error| Error::Load {
-        path: base.map(Path::to_path_buf).unwrap_or_default(),
+        path: PathBuf::new(),
         source: Box::new(e),
     };
     check_glb_header(bytes).map_err(|message| Error::Load {
-        path: base.map(Path::to_path_buf).unwrap_or_default(),
+        path: PathBuf::new(),
         source: message.into(),
     })?;
     let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(wrap)?;
     super::gltf_checks::check_document(gltf.document.as_json())?;
-    let buffers = super::buffers::load_buffers(gltf.document.as_json(), gltf.blob.clone(), base)?;
+    let buffers = super::buffers::load_buffers(gltf.document.as_json(), gltf.blob.clone(), assets)?;
     super::gltf_data::check_data(gltf.document.as_json(), &buffers)?;
     super::gltf_graph::check_graph(gltf.document.as_json())?;
     super::gltf_graph::check_forest(gltf.document.as_json())?;
@@ -79,7 +111,7 @@ pub(super) fn load_slice(bytes: &[u8], base: Option<&Path>) -> Result<Scene> {
 
     let mut scene = Scene::new();
     let mut material_ids = Vec::with_capacity(doc.materials().len());
-    let mut textures = super::gltf_textures::TextureLoader::new(&buffers, base);
+    let mut textures = super::gltf_textures::TextureLoader::new(&buffers, assets);
     for m in doc.materials() {
         let (material, factors) = convert_material(&m)?;
         let specular = material.brdf.is_specular();
@@ -151,12 +183,13 @@ fn load_node(
                 continue;
             }
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
-            let Some(positions) = reader.read_positions() else {
+            let Some(positions) = prim.get(&Semantic::Positions) else {
                 return Err(Error::InvalidScene(format!(
                     "{mesh_label} primitive {pi} has no POSITION attribute"
                 )));
             };
-            let positions: Vec<Vec3> = positions
+            let positions: Vec<Vec3> = read_f32_vectors::<3>(&positions, buffers)?
+                .into_iter()
                 .map(|p| world.transform_point3(Vec3::from(p)))
                 .collect();
             let flat: Vec<u32> = match reader.read_indices() {
@@ -180,8 +213,13 @@ fn load_node(
             };
             // NORMAL: shading normals, by the inverse transpose of the node's matrix.
             let normal_matrix = world.inverse().transpose();
-            let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| {
-                n.map(|v| normal_matrix.transform_vector3(Vec3::from(v)))
+            let normals = match prim.get(&Semantic::Normals) {
+                Some(n) => Some(read_f32_vectors::<3>(&n, buffers)?),
+                None => None,
+            };
+            let normals: Option<Vec<Vec3>> = normals.map(|n| {
+                n.into_iter()
+                    .map(|v| normal_matrix.transform_vector3(Vec3::from(v)))
                     .collect()
             });
             let name = format!("{}#{pi}", mesh.name().unwrap_or("mesh"));
@@ -190,7 +228,7 @@ fn load_node(
                 scene.set_vertex_normals(index, n)?;
             }
             let prim_label = format!("{mesh_label} primitive {pi}");
-            super::gltf_textures::load_texcoords(scene, index, (&prim, &reader), &prim_label)?;
+            super::gltf_textures::load_texcoords(scene, index, &prim, buffers, &prim_label)?;
         }
     }
     if let Some(light) = node.light() {

@@ -6,9 +6,10 @@
 //! and BLEND, and the textures of mirrors and glass.
 //!
 //! Images come from a `bufferView` (a GLB's usual form) or a `data:` URI.
-//! Image files beside the scene (`uri: "wood.png"`) are read like buffers:
-//! only inside the scene's folder (see [`super::buffers`]).
+//! Image files (`uri: "wood.png"`, `../textures/wood.png`) are read like
+//! buffers: only inside the scene's asset root (see [`super::assets`]).
 
+use super::assets::AssetRoot;
 use super::gltf_images::{decode, MAX_TEXELS};
 use super::texture::{Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
 use super::textured::MaterialMaps;
@@ -17,12 +18,11 @@ use crate::brdf::GltfMaterial;
 use crate::error::{Error, Result};
 use glam::Vec2;
 use std::collections::HashMap;
-use std::path::Path;
 
 /// Loads each texture once, the first time a material reads it.
 pub(super) struct TextureLoader<'a> {
     buffers: &'a [Vec<u8>],
-    base: Option<&'a Path>,
+    assets: Option<&'a AssetRoot>,
     /// glTF texture index -> scene texture index.
     loaded: HashMap<usize, usize>,
     /// Texels the scene's textures may still take.
@@ -50,10 +50,10 @@ fn sampler_of(s: &gltf::texture::Sampler) -> Sampler {
 }
 
 impl<'a> TextureLoader<'a> {
-    pub(super) fn new(buffers: &'a [Vec<u8>], base: Option<&'a Path>) -> Self {
+    pub(super) fn new(buffers: &'a [Vec<u8>], assets: Option<&'a AssetRoot>) -> Self {
         TextureLoader {
             buffers,
-            base,
+            assets,
             loaded: HashMap::new(),
             budget: MAX_TEXELS,
         }
@@ -142,11 +142,11 @@ impl<'a> TextureLoader<'a> {
                     .map(<[u8]>::to_vec)
                     .ok_or_else(|| Error::InvalidScene(format!("{what}: past its buffer's end")))
             }
-            gltf::image::Source::Uri { uri, .. } => super::buffers::read_resource(
+            gltf::image::Source::Uri { uri, .. } => super::assets::read_resource(
                 what,
                 uri,
                 super::buffers::MAX_BUFFER_BYTES,
-                self.base,
+                self.assets,
             ),
         }
     }
@@ -180,17 +180,15 @@ fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
     }
 }
 
-/// Reads the texture coordinates the mesh's material needs into mesh
-/// `mesh` of `scene`.
-pub(super) fn load_texcoords<'a, 's, F>(
+/// Reads the texture coordinates the mesh's material needs, from primitive
+/// `prim`, into mesh `mesh` of `scene`.
+pub(super) fn load_texcoords(
     scene: &mut Scene,
     mesh: usize,
-    (prim, reader): (&gltf::Primitive, &gltf::mesh::Reader<'a, 's, F>),
+    prim: &gltf::Primitive,
+    buffers: &[Vec<u8>],
     label: &str,
-) -> Result<()>
-where
-    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
-{
+) -> Result<()> {
     let material = scene.meshes[mesh].material;
     let Some(maps) = scene.material_maps(material) else {
         return Ok(());
@@ -206,27 +204,13 @@ where
         let Ok(set_u32) = u32::try_from(set) else {
             continue;
         };
-        // The gltf crate's reader reaches `unreachable!` on a signed or
-        // unnormalized integer type: only the core spec's three are read.
-        if let Some(a) = prim.get(&gltf::Semantic::TexCoords(set_u32)) {
-            use gltf::accessor::DataType as D;
-            let ok = match a.data_type() {
-                D::F32 => true,
-                D::U8 | D::U16 => a.normalized(),
-                _ => false,
-            };
-            if !ok || a.dimensions() != gltf::accessor::Dimensions::Vec2 {
-                return Err(Error::InvalidScene(format!(
-                    "{label}: TEXCOORD_{set} must be VEC2 of floats or normalized unsigned bytes or shorts"
-                )));
-            }
-        }
-        let Some(uvs) = reader.read_tex_coords(set_u32) else {
+        let Some(uvs) = prim.get(&gltf::mesh::Semantic::TexCoords(set_u32)) else {
             return Err(Error::InvalidScene(format!(
                 "{label} has no TEXCOORD_{set}, which its material's textures read"
             )));
         };
-        let uvs: Vec<Vec2> = uvs.into_f32().map(Vec2::from).collect();
+        let uvs = super::gltf_quantized::read_f32_vectors::<2>(&uvs, buffers)?;
+        let uvs: Vec<Vec2> = uvs.into_iter().map(Vec2::from).collect();
         scene.set_texcoords(mesh, set, uvs)?;
     }
     Ok(())

@@ -9,6 +9,8 @@
 //! the emitters and materials found here, nothing else.
 
 #[cfg(feature = "gltf")]
+mod assets;
+#[cfg(feature = "gltf")]
 mod buffers;
 mod checks;
 #[cfg(feature = "gltf")]
@@ -25,6 +27,8 @@ mod gltf_images;
 #[cfg(feature = "gltf")]
 mod gltf_load;
 #[cfg(feature = "gltf")]
+mod gltf_quantized;
+#[cfg(feature = "gltf")]
 mod gltf_textures;
 mod light;
 mod prepared;
@@ -33,10 +37,14 @@ pub mod texture;
 mod textured;
 
 #[cfg(feature = "gltf")]
-pub use buffers::{percent_decode, resolve_inside, MAX_BUFFER_BYTES};
+pub use assets::{percent_decode, resolve_inside};
+#[cfg(feature = "gltf")]
+pub use buffers::MAX_BUFFER_BYTES;
 pub use checks::{MAX_COORDINATE, MAX_LIGHT_POWER, MAX_RADIANCE, MIN_LIGHT_POWER};
 #[cfg(feature = "gltf")]
 pub use gltf_images::MAX_TEXELS;
+#[cfg(feature = "gltf")]
+pub use gltf_load::LoadOptions;
 
 pub use directional::DirectionalLight;
 pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
@@ -335,18 +343,41 @@ impl Scene {
         cornell::load()
     }
 
-    /// Loads a `.gltf` or `.glb` file.
+    /// Loads a `.gltf` or `.glb` file; its external files are read from its
+    /// own folder (see [`Scene::load_with`] for another).
     ///
     /// # Errors
     /// [`Error::Io`] (with the path) for a file that cannot be read: missing,
     /// unreadable, not a regular file, or over 2 GiB; [`Error::Load`] for a
     /// truncated or malformed one;
     /// [`Error::InvalidScene`] for NaN or infinite positions, a scene without
-    /// any light, or an unsupported primitive; [`Error::InvalidParameter`] for a
-    /// negative or NaN `cos^n` exponent.
+    /// any light, an unsupported primitive, or an external file outside the
+    /// scene's folder; [`Error::InvalidParameter`] for a negative or NaN
+    /// `cos^n` exponent.
     #[cfg(feature = "gltf")]
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
-        gltf_load::load_path(path.as_ref())
+        Self::load_with(path, &LoadOptions::default())
+    }
+
+    /// Loads a `.gltf` or `.glb` file as `options` say: with
+    /// [`LoadOptions::asset_root`], its buffers and images may be anywhere
+    /// inside that folder (`../buffers/x.bin`), never outside it.
+    ///
+    /// ```no_run
+    /// # use adaptive_pm::scene::{LoadOptions, Scene};
+    /// let options = LoadOptions::default().with_asset_root("assets");
+    /// let scene = Scene::load_with("assets/scenes/room.gltf", &options)?;
+    /// # Ok::<(), adaptive_pm::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Scene::load`]; [`Error::Io`] naming the root when it cannot be
+    /// resolved; [`Error::InvalidScene`] when it is not a folder, when it
+    /// does not hold the scene file, or when an external file lies outside it
+    /// (the message names the URI and the root).
+    #[cfg(feature = "gltf")]
+    pub fn load_with(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Self> {
+        gltf_load::load_path(path.as_ref(), options)
     }
 
     /// A built-in scene by name ([`builtin_names`]), else a path to a glTF
@@ -359,7 +390,24 @@ impl Scene {
     /// As [`Scene::load`]; [`Error::InvalidScene`] listing the built-in names
     /// when `name_or_path` is neither a built-in name nor an existing file.
     pub fn open(name_or_path: &str) -> Result<Self> {
+        Self::open_with(name_or_path, &LoadOptions::default())
+    }
+
+    /// As [`Scene::open`], a file loaded as `options` say.
+    #[cfg(feature = "gltf")]
+    #[doc(hidden)]
+    ///
+    /// # Errors
+    /// As [`Scene::open`] and [`Scene::load_with`]; [`Error::InvalidScene`]
+    /// for an asset root given with a built-in scene (it reads no file).
+    pub fn open_with(name_or_path: &str, options: &LoadOptions) -> Result<Self> {
         if let Some(s) = cornell::builtin(name_or_path) {
+            if let Some(root) = &options.asset_root {
+                return Err(Error::InvalidScene(format!(
+                    "the built-in scene `{name_or_path}` reads no file: the asset root `{}` does not apply",
+                    root.display()
+                )));
+            }
             return s;
         }
         if !Path::new(name_or_path).exists() {
@@ -368,7 +416,7 @@ impl Scene {
                 builtin_names().join(", ")
             )));
         }
-        Self::load(name_or_path)
+        Self::load_with(name_or_path, options)
     }
 
     /// Adds a material and returns its index.

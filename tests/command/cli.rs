@@ -155,3 +155,65 @@ fn quality_zero_is_an_empty_run_and_bad_input_is_a_clear_error() {
         assert!(err.contains(needle), "{args:?}: {err}");
     }
 }
+
+/// `assets/cornell_empty.gltf` rewritten as `root/scenes/box.gltf` whose
+/// buffer is `../buffers/box.bin`; returns the root and the scene.
+fn box_with_a_sibling_buffer(dir: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
+    let asset = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell_empty.gltf");
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(asset).unwrap()).unwrap();
+    let uri = v["buffers"][0]["uri"].as_str().unwrap().to_string();
+    let (_, payload) = uri.split_once(";base64,").unwrap();
+    let root = dir.join("root");
+    std::fs::create_dir_all(root.join("scenes")).unwrap();
+    std::fs::create_dir_all(root.join("buffers")).unwrap();
+    std::fs::write(
+        root.join("buffers/box.bin"),
+        base64::decode(payload).unwrap(),
+    )
+    .unwrap();
+    v["buffers"][0]["uri"] = Value::from("../buffers/box.bin");
+    let scene = root.join("scenes/box.gltf");
+    std::fs::write(&scene, v.to_string()).unwrap();
+    (root, scene)
+}
+
+#[test]
+fn asset_root_lets_a_scene_read_a_sibling_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let (root, scene) = box_with_a_sibling_buffer(dir.path());
+    let (scene, root) = (scene.to_str().unwrap(), root.to_str().unwrap());
+    let v = json(&["scene", scene, "--asset-root", root, "--json"]);
+    assert_eq!(v["triangles"], 12);
+    let v = json(&[
+        "trace",
+        scene,
+        "--asset-root",
+        root,
+        "--n-max",
+        "2000",
+        "--json",
+    ]);
+    assert!(v["stored"].as_u64().unwrap() > 0, "{v}");
+    let (code, _, err) = run(&["scene", scene, "--json"]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("`../buffers/box.bin`") && err.contains("leaves the asset root"),
+        "{err}"
+    );
+    let (code, _, err) = run(&["scene", "cornell", "--asset-root", root]);
+    assert_ne!(code, 0);
+    assert!(err.contains("does not apply"), "{err}");
+}
+
+#[test]
+fn a_scene_in_the_working_folder_reads_its_buffer() {
+    let dir = tempfile::tempdir().unwrap();
+    let (root, _) = box_with_a_sibling_buffer(dir.path());
+    let out = Command::new(env!("CARGO_BIN_EXE_adaptive-pm"))
+        .args(["scene", "box.gltf", "--asset-root", "..", "--json"])
+        .current_dir(root.join("scenes"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+}

@@ -66,7 +66,7 @@ fn downward_share(scene: &Scene, n: usize, seed: u64) -> f64 {
 }
 
 /// Photons stored on the floor (y = 0) by a classic trace of `n_max` photons.
-fn floor_photons(scene: &Scene, n_max: u64, seed: u64) -> u64 {
+pub(crate) fn floor_photons(scene: &Scene, n_max: u64, seed: u64) -> u64 {
     let device = Device::new().unwrap();
     let prepared = Arc::new(scene.clone().commit(&device).unwrap());
     let tracer = Tracer::new(Arc::clone(&prepared));

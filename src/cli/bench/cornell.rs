@@ -4,7 +4,7 @@
 //! empty box), written as CSV files, SVG/PNG figures and `claims.md`, with
 //! the paper's claims checked in a table.
 
-use crate::cli::common::{parse_estimator, EmbreeArgs, ThreadArgs};
+use crate::cli::common::{parse_estimator, AssetRootArgs, EmbreeArgs, ThreadArgs};
 use adaptive_pm::analysis::Estimator;
 use adaptive_pm::engine::config::DEFAULT_MAX_DEPTH;
 use adaptive_pm::engine::Mode;
@@ -26,6 +26,8 @@ pub struct CornellArgs {
     /// `cornell` (with both blocks), or a glTF file with one area light.
     #[arg(long, default_value = adaptive_pm::scene::BUILTIN_CORNELL_EMPTY)]
     pub scene: String,
+    #[command(flatten)]
+    pub assets: AssetRootArgs,
     /// Light exponents n: A..B (inclusive), A..B:STEP, or a list a,b,c.
     #[arg(long, default_value = "1..200")]
     pub n_sweep: String,
@@ -84,6 +86,7 @@ pub fn run(args: CornellArgs) -> anyhow::Result<()> {
     modes.dedup();
     let cfg = CornellConfig {
         scene: args.scene.clone(),
+        asset_root: args.assets.asset_root.clone(),
         n_values: parse_sweep(&args.n_sweep)?,
         n_max: args.n_max,
         modes,
@@ -95,7 +98,7 @@ pub fn run(args: CornellArgs) -> anyhow::Result<()> {
     };
     cfg.validate()?;
     // A bad scene name fails here, before the output folder is made.
-    adaptive_pm::scene::Scene::open(&cfg.scene)
+    adaptive_pm::scene::Scene::open_with(&cfg.scene, &cfg.load_options())
         .with_context(|| format!("--scene `{}`", cfg.scene))?;
     let out_dir = args.out.clone().unwrap_or_else(|| {
         let t = std::time::SystemTime::now()

@@ -3,7 +3,7 @@
 //! alone (see `adaptive_pm::experiments::render_study`). Times are from one run on one
 //! thread pool: only their ratios mean anything on a shared machine.
 
-use crate::cli::common::{open_scene, EmbreeArgs, ThreadArgs};
+use crate::cli::common::{open_scene, AssetRootArgs, EmbreeArgs, ThreadArgs};
 use adaptive_pm::engine::Mode;
 use adaptive_pm::experiments::render_study::{run_direct_study, run_study, StudyConfig};
 use adaptive_pm::render::RenderConfig;
@@ -15,6 +15,8 @@ pub struct RenderBenchArgs {
     /// `cornell`, `cornell-empty`, `cornell-glass` or a glTF file.
     #[arg(default_value = "cornell")]
     pub scene: String,
+    #[command(flatten)]
+    pub assets: AssetRootArgs,
     /// Override every area light's cos^n exponent.
     #[arg(long, allow_negative_numbers = true, value_parser = crate::cli::common::parse_finite)]
     pub cosn: Option<f32>,
@@ -60,7 +62,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
         "target must be in (0, 1), got {}",
         args.target
     );
-    let scene = open_scene(&args.scene, args.cosn)?;
+    let scene = open_scene(&args.scene, &args.assets, args.cosn)?;
     let device = args.embree.device()?;
     let tracer = adaptive_pm::engine::Tracer::new(scene.commit(&device)?);
     let pool = args.threads.pool()?;

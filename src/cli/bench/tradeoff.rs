@@ -1,7 +1,7 @@
 //! `adaptive-pm bench tradeoff <SCENE>`: the speed/accuracy trade against a
 //! path-traced reference (see `adaptive_pm::experiments::tradeoff`).
 
-use super::super::common::{open_scene, EmbreeArgs, ThreadArgs};
+use super::super::common::{open_scene, AssetRootArgs, EmbreeArgs, ThreadArgs};
 use adaptive_pm::engine::{Budget, Mode};
 use adaptive_pm::experiments::tradeoff::knob::{choose_quality, Target};
 use adaptive_pm::experiments::tradeoff::output::{summary_text, to_json, write_outputs};
@@ -15,6 +15,8 @@ pub struct TradeoffArgs {
     /// A glTF file, `cornell`, or another built-in scene name.
     #[arg(default_value = "cornell")]
     pub scene: String,
+    #[command(flatten)]
+    pub assets: AssetRootArgs,
     /// N_MAX of each budget level (comma separated).
     #[arg(long, value_delimiter = ',', default_value = "10000,40000,160000")]
     pub n_max: Vec<u64>,
@@ -71,7 +73,7 @@ pub struct TradeoffArgs {
 }
 
 pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
-    let scene = open_scene(&args.scene, args.cosn)?;
+    let scene = open_scene(&args.scene, &args.assets, args.cosn)?;
     let budgets: Vec<u64> = match &args.qualities {
         Some(qs) => qs
             .iter()
