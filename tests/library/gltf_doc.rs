@@ -91,6 +91,17 @@ impl Doc {
             json!(self.accessors.len() - 1);
     }
 
+    /// Adds `TANGENT` values to primitive 0 of mesh `mesh`.
+    pub(crate) fn tangents(&mut self, mesh: usize, t: &[[f32; 4]]) {
+        let bytes: Vec<u8> = t.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+        let v = self.view(&bytes);
+        self.accessors.push(
+            json!({"bufferView": v, "componentType": 5126, "count": t.len(), "type": "VEC4"}),
+        );
+        self.meshes[mesh]["primitives"][0]["attributes"]["TANGENT"] =
+            json!(self.accessors.len() - 1);
+    }
+
     /// Adds a texture of the PNG `png` read through sampler `sampler` (a
     /// sampler's JSON) and returns its index.
     pub(crate) fn texture(&mut self, png: &[u8], sampler: Value) -> usize {
