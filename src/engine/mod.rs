@@ -17,6 +17,9 @@
 
 pub mod albedo;
 pub(crate) mod buffer;
+pub mod caustic;
+pub mod caustic_aim;
+pub mod caustic_emit;
 pub mod config;
 pub mod counts;
 mod density_control;
@@ -29,6 +32,8 @@ pub mod tracer;
 pub mod wave;
 
 pub use buffer::{map_frame, POWER_HEADROOM};
+pub use caustic::{default_caustic_photons, CausticOutput, CausticReport};
+pub use caustic_aim::CausticAim;
 pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig, PAPER_N_MAX};
 pub use measure::{density_points, map_density, map_metrics, primary_density, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};

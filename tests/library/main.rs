@@ -13,6 +13,7 @@ mod analysis_monotone;
 mod bench_cornell;
 mod big_run;
 mod brdf_models;
+mod caustic_pass;
 mod cornell_empty;
 mod cornell_rays;
 mod dielectric;
