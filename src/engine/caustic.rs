@@ -60,6 +60,52 @@ pub fn default_caustic_photons(scene: &Scene, n_max: u64) -> u64 {
     }
 }
 
+/// How many photons a caustic pass emits: the default for the scene and
+/// `N_MAX` ([`default_caustic_photons`]), or a count (0: no pass).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum CausticBudget {
+    /// [`default_caustic_photons`].
+    #[default]
+    Auto,
+    /// This many (0: no pass).
+    Photons(u64),
+}
+
+impl CausticBudget {
+    /// The count for a scene and `N_MAX`.
+    pub fn photons(self, scene: &Scene, n_max: u64) -> u64 {
+        match self {
+            CausticBudget::Auto => default_caustic_photons(scene, n_max),
+            CausticBudget::Photons(n) => n,
+        }
+    }
+}
+
+impl std::fmt::Display for CausticBudget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CausticBudget::Auto => f.write_str("auto"),
+            CausticBudget::Photons(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+impl std::str::FromStr for CausticBudget {
+    type Err = Error;
+    /// `auto` or a photon count.
+    fn from_str(s: &str) -> Result<Self> {
+        match s.trim() {
+            "auto" => Ok(CausticBudget::Auto),
+            n => n.parse().map(CausticBudget::Photons).map_err(|_| {
+                Error::param(
+                    "caustic photons",
+                    format!("`{s}` is neither `auto` nor a photon count"),
+                )
+            }),
+        }
+    }
+}
+
 /// What a caustic pass did.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct CausticReport {
@@ -303,4 +349,26 @@ fn caustic_frame(scene: &Scene, records: &[PhotonRecord]) -> Quantizer {
         .map(|r| r.power.max_element())
         .fold(0.0f32, f32::max);
     Quantizer::new(lo, hi, if largest > 0.0 { largest } else { 1.0 })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budgets_parse_and_refuse_by_name() {
+        assert_eq!(
+            "auto".parse::<CausticBudget>().unwrap(),
+            CausticBudget::Auto
+        );
+        assert_eq!(
+            " 1000 ".parse::<CausticBudget>().unwrap(),
+            CausticBudget::Photons(1000)
+        );
+        for bad in ["", "-1", "1e6", "many"] {
+            let e = bad.parse::<CausticBudget>().unwrap_err().to_string();
+            assert!(e.contains("caustic photons"), "{bad}: {e}");
+        }
+        assert_eq!(CausticBudget::Photons(7).to_string(), "7");
+    }
 }

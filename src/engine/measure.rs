@@ -141,13 +141,14 @@ impl Maps {
     /// ([`crate::engine::Tracer::trace_caustic`]) instead of the main
     /// trace's caustic photons, which stay in `full` (the gather reads them
     /// at secondary hits) but no longer in `caustic`: a caustic is counted
-    /// once, from the pass.
+    /// once, from the pass. `build_caustic_s` adds the new tree's build
+    /// to the time of the one it replaces (both were spent).
     pub fn with_caustic_pass(self, pass: super::CausticOutput) -> Self {
         let t = Instant::now();
         let caustic = pass.into_map();
         Maps {
             caustic,
-            build_caustic_s: t.elapsed().as_secs_f64(),
+            build_caustic_s: self.build_caustic_s + t.elapsed().as_secs_f64(),
             ..self
         }
     }

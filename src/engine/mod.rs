@@ -32,7 +32,7 @@ pub mod tracer;
 pub mod wave;
 
 pub use buffer::{map_frame, POWER_HEADROOM};
-pub use caustic::{default_caustic_photons, CausticOutput, CausticReport};
+pub use caustic::{default_caustic_photons, CausticBudget, CausticOutput, CausticReport};
 pub use caustic_aim::CausticAim;
 pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig, PAPER_N_MAX};
 pub use measure::{density_points, map_density, map_metrics, primary_density, MapMetrics, Maps};
