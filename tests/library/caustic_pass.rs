@@ -26,7 +26,7 @@ const MIRROR_CENTRE: Vec3 = Vec3::new(-0.6, 0.5, 0.0);
 const GLASS_CENTRE: Vec3 = Vec3::new(0.6, 0.5, 0.0);
 const RADIUS: f32 = 0.4;
 
-fn material(s: &mut Scene, name: &str, brdf: adaptive_pm::brdf::Brdf) -> usize {
+pub(crate) fn material(s: &mut Scene, name: &str, brdf: adaptive_pm::brdf::Brdf) -> usize {
     s.add_material(Material {
         name: name.into(),
         brdf,
@@ -35,7 +35,7 @@ fn material(s: &mut Scene, name: &str, brdf: adaptive_pm::brdf::Brdf) -> usize {
 }
 
 /// A UV sphere of outward-wound triangles.
-fn sphere(s: &mut Scene, name: &str, centre: Vec3, r: f32, mat: usize) {
+pub(crate) fn sphere(s: &mut Scene, name: &str, centre: Vec3, r: f32, mat: usize) {
     let (stacks, slices) = (24u32, 48u32);
     let mut pos = Vec::new();
     for i in 0..=stacks {
@@ -67,7 +67,7 @@ fn sphere(s: &mut Scene, name: &str, centre: Vec3, r: f32, mat: usize) {
     s.add_mesh(name, pos, idx, mat).unwrap();
 }
 
-fn quad(s: &mut Scene, name: &str, y: f32, half: f32, up: bool, mat: usize) {
+pub(crate) fn quad(s: &mut Scene, name: &str, y: f32, half: f32, up: bool, mat: usize) {
     let pos = vec![
         Vec3::new(-half, y, -half),
         Vec3::new(half, y, -half),

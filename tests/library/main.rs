@@ -14,6 +14,7 @@ mod bench_cornell;
 mod big_run;
 mod brdf_models;
 mod caustic_pass;
+mod caustic_render;
 mod cornell_empty;
 mod cornell_rays;
 mod dielectric;
