@@ -5,6 +5,8 @@ use super::common::{
     open_scene, progress_bar, AssetRootArgs, EmbreeArgs, ThreadArgs, TraceConfigArgs,
 };
 use adaptive_pm::embree::EmbreeScene;
+use adaptive_pm::engine::caustic::BYTES_PER_CAUSTIC_PHOTON;
+use adaptive_pm::engine::tracer::BYTES_PER_STORED_PHOTON;
 use adaptive_pm::engine::{CausticBudget, CausticReport, Mode, TraceConfig, Tracer};
 use adaptive_pm::output::refuse_overwrite;
 use adaptive_pm::photon_file::read_render_maps;
@@ -72,7 +74,8 @@ pub struct RenderArgs {
     /// (Jensen's projection map); the caustic map is then the pass's, not
     /// the main trace's caustic photons. 0 turns the pass off. Default:
     /// N_MAX (the main trace's budget) when the scene has a mirror or glass
-    /// mesh and a light, else 0 (`auto`); 0 with --map.
+    /// mesh and a light, else 0 (`auto`, which shrinks to what the main
+    /// map leaves of --budget-mb); 0 with --map.
     #[arg(long)]
     pub caustic_photons: Option<CausticBudget>,
     /// Linear radiance, OpenEXR.
@@ -191,8 +194,21 @@ fn caustic_pass(
     if n == 0 || cfg.view != View::Full {
         return Ok((maps, None));
     }
+    // The pass gets what the main map left of the budget; `auto` shrinks
+    // to fit it, a count asked for is refused when it does not.
+    let used = maps.full.len() as u64 * BYTES_PER_STORED_PHOTON;
+    let left = trace_cfg.check()?.memory_budget().saturating_sub(used);
+    let n = match args.caustic_photons {
+        None | Some(CausticBudget::Auto) => n.min(left / BYTES_PER_CAUSTIC_PHOTON),
+        Some(CausticBudget::Photons(_)) => n,
+    };
+    if n == 0 {
+        return Ok((maps, None));
+    }
+    let mut pass_cfg = trace_cfg.clone();
+    pass_cfg.memory_budget = Some(left);
     let tracer = Tracer::new(Arc::clone(prepared));
-    let pass = pool.install(|| tracer.trace_caustic(trace_cfg, n))?;
+    let pass = pool.install(|| tracer.trace_caustic(&pass_cfg, n))?;
     let report = pass.report.clone();
     Ok((pool.install(|| maps.with_caustic_pass(pass)), Some(report)))
 }

@@ -22,7 +22,10 @@
 //!
 //! No splitting: the pass follows few bounces, and every photon it emits
 //! is already aimed; Russian roulette alone decides survival, so a pass
-//! stores at most one photon per photon emitted.
+//! stores at most one photon per photon emitted. The memory budget counts
+//! [`BYTES_PER_CAUSTIC_PHOTON`] per emitted photon: the stored ones are
+//! held as full records until the pass encodes them in its frame, which
+//! needs their largest power.
 
 use super::albedo::AlbedoTable;
 use super::buffer::trace_wave;
@@ -30,7 +33,7 @@ use super::caustic_aim::CausticAim;
 use super::caustic_emit::aimed_photon;
 use super::config::{CheckedConfig, TraceConfig};
 use super::stream::WAVE;
-use super::tracer::{Tracer, BYTES_PER_STORED_PHOTON};
+use super::tracer::Tracer;
 use super::wave::{PathState, ShadeContext};
 use crate::error::{Error, Result};
 use crate::photon_map::{CompactPhoton, PhotonMap, PhotonRecord, Quantizer};
@@ -44,6 +47,12 @@ use std::time::Instant;
 /// Keys the caustic pass's photons apart from the main trace's: light
 /// `l`'s photons are keyed by `hash2(hash2(seed, CAUSTIC_STREAM), l)`.
 pub const CAUSTIC_STREAM: u64 = 0xCA05_71C0_0000_0001;
+
+/// Bytes the memory budget counts per emitted caustic photon: at most one
+/// stored photon each, held as a full record until the pass encodes it,
+/// then compact.
+pub const BYTES_PER_CAUSTIC_PHOTON: u64 =
+    (std::mem::size_of::<PhotonRecord>() + std::mem::size_of::<CompactPhoton>()) as u64;
 
 /// The default caustic photon count as a share of `N_MAX`
 /// ([`default_caustic_photons`]).
@@ -176,8 +185,8 @@ impl<C: RayCaster> Tracer<C> {
     ///
     /// # Errors
     /// As [`Tracer::trace`] for bad settings and a caster's bad hit;
-    /// [`Error::Budget`] when `photons` stored photons would not fit in
-    /// the memory budget.
+    /// [`Error::Budget`] when `photons` caustic photons would not fit in
+    /// the memory budget ([`BYTES_PER_CAUSTIC_PHOTON`] each).
     pub fn trace_caustic(&self, cfg: &TraceConfig, photons: u64) -> Result<CausticOutput> {
         self.trace_caustic_checked(&cfg.check()?, photons)
     }
@@ -199,10 +208,10 @@ impl<C: RayCaster> Tracer<C> {
         let per_light: Vec<u64> = counts.iter().map(|&n| shard.len_of(n)).collect();
         let emitted: u64 = per_light.iter().sum();
         let budget = cfg.memory_budget();
-        if emitted > budget / BYTES_PER_STORED_PHOTON {
+        if emitted > budget / BYTES_PER_CAUSTIC_PHOTON {
             return Err(Error::Budget {
                 photons: emitted,
-                needed_bytes: emitted.saturating_mul(BYTES_PER_STORED_PHOTON),
+                needed_bytes: emitted.saturating_mul(BYTES_PER_CAUSTIC_PHOTON),
                 budget_bytes: budget,
             });
         }
@@ -370,5 +379,11 @@ mod tests {
             assert!(e.contains("caustic photons"), "{bad}: {e}");
         }
         assert_eq!(CausticBudget::Photons(7).to_string(), "7");
+    }
+
+    #[test]
+    fn the_budget_per_photon_is_the_one_the_docs_quote() {
+        // docs/rendering.md and docs/method.md give 56 bytes.
+        assert_eq!(BYTES_PER_CAUSTIC_PHOTON, 56);
     }
 }

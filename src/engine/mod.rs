@@ -1,5 +1,7 @@
 //! The photon engine: wavefront tracing in three modes (docs/method.md,
-//! "Photon counts", "Caps and global budget" and "The three modes").
+//! "Photon counts", "Caps and global budget" and "The three modes"), and a
+//! caustic pass aimed at the specular objects ([`caustic`], docs/method.md,
+//! "The caustic pass").
 //!
 //! ```no_run
 //! use adaptive_pm::embree::Device;

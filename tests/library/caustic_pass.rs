@@ -423,3 +423,24 @@ fn a_scene_without_specular_objects_makes_an_empty_pass() {
     let glass = Scene::open(adaptive_pm::scene::BUILTIN_CORNELL_GLASS).unwrap();
     assert!(default_caustic_photons(&glass, 1_000_000) > 0);
 }
+
+#[test]
+fn a_pass_over_the_memory_budget_is_refused_before_tracing() {
+    let tracer = cornell_glass();
+    let cfg = TraceConfig {
+        memory_budget: Some(1 << 20),
+        ..TraceConfig::default()
+    };
+    let e = tracer.trace_caustic(&cfg, 1_000_000).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            adaptive_pm::Error::Budget {
+                photons: 1_000_000,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(tracer.trace_caustic(&cfg, 1000).is_ok());
+}
