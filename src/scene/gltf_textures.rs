@@ -272,7 +272,14 @@ pub(super) fn load_tangents(
         return Ok(());
     };
     let Some(accessor) = prim.get(&gltf::mesh::Semantic::Tangents) else {
-        return scene.generate_tangents(mesh, map.texture.tex_coord);
+        // A valid file may have texture coordinates that give no tangent
+        // (all equal): it loads, shaded with its unbent normals.
+        if let Err(e) = scene.generate_tangents(mesh, map.texture.tex_coord) {
+            scene
+                .warnings
+                .push(format!("{e}; its normal texture is not applied"));
+        }
+        return Ok(());
     };
     let linear = glam::Mat3::from_mat4(*world);
     let sign = linear.determinant().signum();
