@@ -16,7 +16,9 @@
 //!   probability (the estimate is unbiased whatever the weights).
 //!
 //! Area light of radiance `L0 cos^n(theta_l)` (one-sided, about the
-//! triangle's geometric normal); point light `I cos(theta_x) / r^2`; spot
+//! triangle's geometric normal; `L0` the texel's on a textured light, whose
+//! points are drawn by emitted power, [`crate::scene::AreaLight::sample_point_2d`],
+//! and divided by that pdf); point light `I cos(theta_x) / r^2`; spot
 //! light the same times its falloff; directional light `E cos(theta_x)`,
 //! its shadow ray unbounded towards the light. Point, spot and directional
 //! lights are deltas: no BRDF sample finds them, so nothing else counts them.
@@ -127,7 +129,7 @@ impl<'a> LightSampler<'a> {
             Light::Area(a) => {
                 let (wi, r2, cos_x) = toward_centre();
                 let cos_l = a.emission.facing((-wi).dot(t.normal)).max(0.05);
-                let le = luminance(a.emission.radiance) * a.emission.profile_toward(cos_l);
+                let le = luminance(a.mean_radiance()) * a.emission.profile_toward(cos_l);
                 le * cos_l * cos_x * a.area / r2.max(a.area)
             }
             Light::Point(p) => {
@@ -172,6 +174,18 @@ impl<'a> LightSampler<'a> {
     /// gives, before the BRDF, `cos(theta_x)` and visibility.
     fn sample_light(&self, i: usize, x: Vec3, u: [f32; 2]) -> Option<(Source, Vec3)> {
         match &self.scene.lights[i] {
+            Light::Area(a) if a.is_textured() => {
+                // By emitted power: the point's texel over its area pdf.
+                let p = a.sample_point_2d(u);
+                let d = x - p.position;
+                let r2 = d.length_squared();
+                let cos_l = a.emission.facing(p.normal.dot(d) / r2.sqrt());
+                if !(r2 > 0.0 && cos_l > 0.0 && p.pdf_area > 0.0) {
+                    return None;
+                }
+                let le = p.radiance * a.emission.profile_toward(cos_l);
+                Some((Source::At(p.position), le * cos_l / (p.pdf_area * r2)))
+            }
             Light::Area(a) => {
                 let t = &self.tables[i];
                 let k = t.cdf.partition_point(|&c| c <= u[0]).min(t.cdf.len() - 1);

@@ -93,9 +93,10 @@ struct SurfaceHit {
 }
 
 impl<'a> Ctx<'a> {
-    fn emitted(material: &Material, h: &Hit, wo: Vec3) -> Vec3 {
+    /// Emission at `h` towards `wo` (its texel's, for an emissive texture).
+    fn emitted(&self, material: &Material, h: &Hit, wo: Vec3) -> Vec3 {
         match material.emission {
-            Some(e) => e.radiance_at(h.ng.dot(wo)),
+            Some(_) => self.scene.emitted_radiance(h, wo),
             None => Vec3::ZERO,
         }
     }
@@ -144,7 +145,7 @@ impl<'a> Ctx<'a> {
             }
             let normal = h.facing(dir);
             if bounce >= first_emission {
-                *emitted += throughput * Self::emitted(material, &h, wo);
+                *emitted += throughput * self.emitted(material, &h, wo);
             }
             if !material.brdf.is_specular() {
                 return Some(SurfaceHit {

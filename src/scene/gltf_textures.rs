@@ -1,8 +1,9 @@
 //! A glTF material's textures: which are read ([`super::textured`]: base
 //! colour and metallic-roughness, on opaque materials), the images decoded
 //! once per texture, and the texture coordinates of the meshes that use
-//! them. What is not modelled is named in the scene's warnings instead of
-//! being dropped silently: emissive and normal textures, `alphaMode` MASK
+//! them (and of those an emissive texture reads: [`super::gltf_emissive`]).
+//! What is not modelled is named in the scene's warnings instead of
+//! being dropped silently: normal textures, `alphaMode` MASK
 //! and BLEND, and the textures of mirrors and glass.
 //!
 //! Images come from a `bufferView` (a GLB's usual form) or a `data:` URI.
@@ -93,7 +94,11 @@ impl<'a> TextureLoader<'a> {
         Ok(Some(maps))
     }
 
-    fn texture_ref(&mut self, info: &gltf::texture::Info, scene: &mut Scene) -> Result<TextureRef> {
+    pub(super) fn texture_ref(
+        &mut self,
+        info: &gltf::texture::Info,
+        scene: &mut Scene,
+    ) -> Result<TextureRef> {
         let t = info.texture();
         let index = match self.loaded.get(&t.index()) {
             Some(&i) => i,
@@ -152,7 +157,7 @@ impl<'a> TextureLoader<'a> {
     }
 }
 
-fn material_label(m: &gltf::Material) -> String {
+pub(super) fn material_label(m: &gltf::Material) -> String {
     match m.index() {
         Some(i) => super::gltf_checks::label("material", i, m.name()),
         None => "the default material".to_string(),
@@ -162,9 +167,6 @@ fn material_label(m: &gltf::Material) -> String {
 /// Warns of the parts of `m` the loader reads but does not model.
 fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
     let mut ignored = Vec::new();
-    if m.emissive_texture().is_some() {
-        ignored.push("its emissiveTexture (it emits its emissiveFactor everywhere)");
-    }
     if m.normal_texture().is_some() {
         ignored.push("its normalTexture (it is shaded with the mesh's normals)");
     }
@@ -190,11 +192,12 @@ pub(super) fn load_texcoords(
     label: &str,
 ) -> Result<()> {
     let material = scene.meshes[mesh].material;
-    let Some(maps) = scene.material_maps(material) else {
-        return Ok(());
-    };
-    let mut sets: Vec<usize> = [maps.base_color, maps.metallic_roughness]
+    let maps = scene.material_maps(material);
+    let refs = maps.map_or([None, None], |m| [m.base_color, m.metallic_roughness]);
+    let emissive = scene.emission_texture(material).copied();
+    let mut sets: Vec<usize> = refs
         .iter()
+        .chain([&emissive])
         .flatten()
         .map(|r| r.tex_coord)
         .collect();

@@ -16,10 +16,14 @@ mod checks;
 #[cfg(feature = "gltf")]
 mod cornell;
 mod directional;
+mod emission_map;
+mod emissive;
 #[cfg(feature = "gltf")]
 pub mod gltf_checks;
 #[cfg(feature = "gltf")]
 mod gltf_data;
+#[cfg(feature = "gltf")]
+mod gltf_emissive;
 #[cfg(feature = "gltf")]
 mod gltf_graph;
 #[cfg(feature = "gltf")]
@@ -47,7 +51,8 @@ pub use gltf_images::MAX_TEXELS;
 pub use gltf_load::LoadOptions;
 
 pub use directional::DirectionalLight;
-pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
+pub use emission_map::MAX_PIECES;
+pub use light::{AreaLight, EmittedPhoton, Light, LightPoint, PointLight, SpotLight};
 pub use prepared::PreparedScene;
 pub use surface::{consistent_with_geometry, SurfacePoint, SurfaceSampler};
 pub use texture::{Encoding, Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
@@ -304,6 +309,8 @@ pub struct Scene {
     pub(crate) textures: Vec<Texture>,
     /// Per material, its textures (`None`, or past the end: untextured).
     pub(crate) material_maps: Vec<Option<MaterialMaps>>,
+    /// Per material, its emissive texture (`None`, or past the end: none).
+    pub(crate) emission_textures: Vec<Option<TextureRef>>,
     /// Bounds of every kept triangle's vertices, `None` before the first
     /// mesh: kept as meshes are added, so that directional lights can be
     /// refitted to it without a pass over all the geometry.
@@ -705,6 +712,7 @@ impl Scene {
             }));
         }
         self.check_texcoords()?;
+        self.check_emission_texcoords()?;
         checks::check_directional_powers(&self.lights)?;
         // In f64: forty lights of 1e37 W each summed to infinity in f32.
         let total = self.lights.iter().fold([0.0f64; 3], |mut t, l| {

@@ -92,7 +92,8 @@ impl Scene {
             m.texcoords.resize(set + 1, Vec::new());
         }
         m.texcoords[set] = uvs;
-        Ok(())
+        // An emissive texture reading this set now shapes the mesh's light.
+        self.texture_area_light(mesh)
     }
 
     /// Textures material `material`, and sets its [`super::Material::brdf`]
@@ -182,7 +183,7 @@ impl Scene {
 
     /// The transformed texture coordinates `r` reads at a hit, `None` when
     /// the mesh lacks its set.
-    fn texcoord(&self, hit: &Hit, r: &TextureRef) -> Option<Vec2> {
+    pub(super) fn texcoord(&self, hit: &Hit, r: &TextureRef) -> Option<Vec2> {
         let mesh = self.meshes.get(hit.geom_id as usize)?;
         let uvs = mesh.texcoords.get(r.tex_coord).filter(|t| !t.is_empty())?;
         let [a, b, c] = *mesh.indices.get(hit.prim_id as usize)?;
