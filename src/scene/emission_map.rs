@@ -15,8 +15,10 @@
 //! pieces, so [`super::AreaLight::power`] is the sum over the texels the
 //! mesh covers, up to rounding.
 //!
-//! A triangle that would need more pieces than the light's budget
-//! ([`MAX_PIECES`]), or whose texture coordinates are degenerate (no area
+//! A triangle whose texel bounding box holds more cells than the light's
+//! budget has left ([`MAX_CELLS`] cells examined per light, which bounds
+//! both the work and the memory), or whose texture coordinates are
+//! degenerate (no area
 //! in uv), is one piece whose integral is a midpoint rule over 256
 //! sub-triangles: the light's power estimate is then approximate, the
 //! photons' power is not (below).
@@ -33,21 +35,21 @@
 //! error of a piece's power estimate, since the weight uses the true
 //! radiance at the point and the true pdf.
 
+use super::emission_cells::{running_ticks, Poly, TICKS};
 use super::texture::{Encoding, Filter, Texture};
 use crate::sampling::{luminance, uniform_triangle};
 use glam::{DVec2, Vec2, Vec3};
 
-/// The most pieces one light is cut into (20 bytes each).
-pub const MAX_PIECES: usize = 1 << 20;
-
-/// Ticks of the piece choice: `u * TICKS` is exact for a 24-bit float.
-const TICKS: u32 = 1 << 24;
+/// The most texel cells one light's triangles may cover (their texel
+/// bounding boxes, summed): at most this many pieces (16 bytes and 4 of
+/// ticks each), and this many polygon clips to build them.
+pub const MAX_CELLS: usize = 1 << 20;
 
 /// The cell of a piece that is a whole triangle.
 const WHOLE: [i32; 2] = [i32::MIN, i32::MIN];
 
 /// Cell coordinates beyond this (in texels) make a triangle whole.
-const MAX_CELL: f64 = 1e9;
+const MAX_TEXEL_COORDINATE: f64 = 1e9;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Piece {
@@ -66,64 +68,6 @@ pub(crate) struct MapSample {
     pub bary: (f32, f32),
     /// Area pdf (world) of the point.
     pub pdf_area: f32,
-}
-
-/// A convex polygon in texel units (a triangle clipped by at most four
-/// axis-aligned lines: seven corners at most).
-#[derive(Clone, Copy)]
-struct Poly {
-    v: [DVec2; 8],
-    n: usize,
-}
-
-impl Poly {
-    fn triangle(t: [DVec2; 3]) -> Self {
-        let mut v = [DVec2::ZERO; 8];
-        v[..3].copy_from_slice(&t);
-        Poly { v, n: 3 }
-    }
-
-    /// The part on the side of `axis = at` that `keep` (+1 above, -1 below) says.
-    fn clip(&self, axis: usize, at: f64, keep: f64) -> Poly {
-        let mut out = Poly {
-            v: [DVec2::ZERO; 8],
-            n: 0,
-        };
-        let side = |p: DVec2| (p[axis] - at) * keep;
-        for k in 0..self.n {
-            let (p, q) = (self.v[k], self.v[(k + 1) % self.n]);
-            let (sp, sq) = (side(p), side(q));
-            if sp >= 0.0 && out.n < 8 {
-                out.v[out.n] = p;
-                out.n += 1;
-            }
-            if (sp >= 0.0) != (sq >= 0.0) && out.n < 8 {
-                out.v[out.n] = p + (q - p) * (sp / (sp - sq));
-                out.n += 1;
-            }
-        }
-        out
-    }
-
-    fn cell(&self, [i, j]: [i32; 2]) -> Poly {
-        let (i, j) = (f64::from(i), f64::from(j));
-        self.clip(1, j, 1.0)
-            .clip(1, j + 1.0, -1.0)
-            .clip(0, i, 1.0)
-            .clip(0, i + 1.0, -1.0)
-    }
-
-    /// Fan triangles and their areas.
-    fn fan(&self) -> impl Iterator<Item = ([DVec2; 3], f64)> + '_ {
-        (1..self.n.saturating_sub(1)).map(|k| {
-            let t = [self.v[0], self.v[k], self.v[k + 1]];
-            (t, 0.5 * (t[1] - t[0]).perp_dot(t[2] - t[0]).abs())
-        })
-    }
-
-    fn area(&self) -> f64 {
-        self.fan().map(|(_, a)| a).sum()
-    }
 }
 
 /// A textured light's radiance and its power distribution.
@@ -183,12 +127,18 @@ impl EmissionMap {
         ));
         let mut powers = Vec::new();
         let mut total = [0.0f64; 3];
+        let mut spent = 0usize;
         for t in 0..map.uvs.len() {
-            let budget = MAX_PIECES.saturating_sub(map.pieces.len());
-            let cut = map.cut(t, budget).unwrap_or_else(|| {
-                map.exact = false;
-                vec![map.whole(t)]
-            });
+            let cut = match map.cut(t, MAX_CELLS - spent) {
+                Some((pieces, cells)) => {
+                    spent += cells;
+                    pieces
+                }
+                None => {
+                    map.exact = false;
+                    vec![map.whole(t)]
+                }
+            };
             for (piece, power) in cut {
                 let lum = f64::from(luminance(Vec3::from(power.map(|p| p as f32))));
                 if piece.cell == WHOLE {
@@ -245,21 +195,25 @@ impl EmissionMap {
         0.5 * (b - a).perp_dot(c - a).abs()
     }
 
-    /// Triangle `t` cut along the cells, each piece with its power; `None`
-    /// when it needs more than `budget` cells or its uv map is degenerate.
-    fn cut(&self, t: usize, budget: usize) -> Option<Vec<(Piece, [f64; 3])>> {
+    /// Triangle `t` cut along the cells, each piece with its power, and the
+    /// cells of its bounding box; `None` when those are more than `budget`
+    /// or its uv map is degenerate.
+    fn cut(&self, t: usize, budget: usize) -> Option<(Vec<(Piece, [f64; 3])>, usize)> {
         let tv = self.texel_space(t);
         let uv_area = self.uv_area(t);
         let (lo, hi) = (tv[0].min(tv[1]).min(tv[2]), tv[0].max(tv[1]).max(tv[2]));
         let span = (hi - lo).max_element().max(1.0);
-        let sane = lo.abs().max(hi.abs()).max_element() < MAX_CELL;
+        let sane = lo.abs().max(hi.abs()).max_element() < MAX_TEXEL_COORDINATE;
         if !(sane && uv_area > 1e-9 * span * span) {
+            return None;
+        }
+        let cells = (hi.x.ceil() - lo.x.floor()).max(1.0) * (hi.y.ceil() - lo.y.floor()).max(1.0);
+        if cells > budget as f64 {
             return None;
         }
         let scale = f64::from(self.areas[t]) / uv_area;
         let tri = Poly::triangle(tv);
         let mut out = Vec::new();
-        let mut visited = 0usize;
         for j in lo.y.floor() as i32..hi.y.ceil() as i32 {
             let strip = tri
                 .clip(1, f64::from(j), 1.0)
@@ -271,10 +225,6 @@ impl EmissionMap {
                 continue;
             }
             for i in x0.floor() as i32..x1.ceil() as i32 {
-                visited += 1;
-                if visited > budget {
-                    return None;
-                }
                 let poly = strip
                     .clip(0, f64::from(i), 1.0)
                     .clip(0, f64::from(i) + 1.0, -1.0);
@@ -291,7 +241,7 @@ impl EmissionMap {
                 out.push((piece, power));
             }
         }
-        Some(out)
+        Some((out, cells as usize))
     }
 
     /// `integral texel duv` over `poly` inside cell `[i, j]`, times the factor.
@@ -464,30 +414,100 @@ impl EmissionMap {
     }
 }
 
-/// Running ticks summing to [`TICKS`]: one per piece, the rest in
-/// proportion to `powers`; `None` when nothing emits.
-fn running_ticks(powers: &[f64]) -> Option<Vec<u32>> {
-    let total: f64 = powers.iter().sum();
-    let n = powers.len();
-    if n == 0 || n > TICKS as usize || !(total > 0.0) || !total.is_finite() {
-        return None;
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use crate::scene::texture::{Sampler, Wrap};
+
+    fn texture(filter: Filter) -> Texture {
+        let texels = (0..16u8)
+            .map(|k| [16 * k, 255 - 16 * k, 7 * k, 255])
+            .collect();
+        let sampler = Sampler {
+            wrap_u: Wrap::Repeat,
+            wrap_v: Wrap::MirroredRepeat,
+            filter,
+        };
+        Texture::new(4, 4, texels, sampler).unwrap()
     }
-    let spare = f64::from(TICKS - n as u32);
-    let mut ticks: Vec<u32> = powers
-        .iter()
-        .map(|p| 1 + (p / total * spare).floor() as u32)
-        .collect();
-    let given: u64 = ticks.iter().map(|&t| u64::from(t)).sum();
-    let largest = (0..n).max_by(|&a, &b| powers[a].total_cmp(&powers[b]))?;
-    ticks[largest] += (u64::from(TICKS) - given) as u32;
-    let mut acc = 0u32;
-    Some(
-        ticks
-            .into_iter()
-            .map(|t| {
-                acc += t;
-                acc
-            })
-            .collect(),
-    )
+
+    fn triangles() -> Vec<[Vec3; 3]> {
+        vec![
+            [
+                Vec3::ZERO,
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(0.0, 0.0, 1.5),
+            ],
+            [
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(2.0, 0.0, 1.5),
+                Vec3::new(0.0, 0.0, 1.5),
+            ],
+        ]
+    }
+
+    /// Every sampled point's pdf is the one the lookup at that point gives
+    /// (what the path tracer's MIS reads), and the pieces' probabilities
+    /// sum to one.
+    #[test]
+    fn the_pdf_at_a_sampled_point_is_the_lookups() {
+        for filter in [Filter::Nearest, Filter::Linear] {
+            let uvs = vec![
+                [
+                    Vec2::new(0.1, -0.3),
+                    Vec2::new(1.7, 0.2),
+                    Vec2::new(-0.2, 1.1),
+                ],
+                [
+                    Vec2::new(1.7, 0.2),
+                    Vec2::new(1.3, 1.4),
+                    Vec2::new(-0.2, 1.1),
+                ],
+            ];
+            let map = EmissionMap::new(texture(filter), Vec3::ONE, &triangles(), uvs).unwrap();
+            assert!(map.is_exact() && map.piece_count() > 20);
+            let sum: f64 = (0..map.piece_count()).map(|k| map.probability(k)).sum();
+            assert!((sum - 1.0).abs() < 1e-12);
+            let mut rng = Rng::new(3);
+            for _ in 0..20_000 {
+                let (k, _) = map.pick(rng.next_f32());
+                let s = map.sample_in(k, rng.next_2d());
+                let looked_up = map.pdf_area(s.triangle, s.bary);
+                let on_edge = (looked_up - s.pdf_area).abs() > 1e-4 * s.pdf_area;
+                // A point on a cell's edge may read the neighbour's piece.
+                if on_edge {
+                    let tv = map.texel_space(s.triangle);
+                    let (b1, b2) = (f64::from(s.bary.0), f64::from(s.bary.1));
+                    let p = tv[0] * (1.0 - b1 - b2) + tv[1] * b1 + tv[2] * b2;
+                    let d = (p - p.round()).abs().min_element();
+                    assert!(
+                        d < 1e-4,
+                        "{filter:?}: pdf {} vs {looked_up} at {p}",
+                        s.pdf_area
+                    );
+                }
+            }
+        }
+    }
+
+    /// A triangle whose texture coordinates are one point is one piece of
+    /// the texel there (its power exact by the midpoint rule, a constant);
+    /// one over the budget is one piece too, its power approximate.
+    #[test]
+    fn degenerate_or_huge_uv_triangles_are_whole() {
+        let p = Vec2::new(0.3, 0.6);
+        let tex = texture(Filter::Nearest);
+        let texel = tex.sample(p, Encoding::Srgb).truncate();
+        let map = EmissionMap::new(tex, Vec3::splat(2.0), &triangles()[..1], vec![[p; 3]]).unwrap();
+        assert_eq!(map.piece_count(), 1);
+        assert!(!map.is_exact());
+        let want = texel * 2.0 * 1.5;
+        assert!((map.integral() - want).abs().max_element() < 1e-5 * want.max_element());
+        let huge = vec![[Vec2::ZERO, Vec2::new(3000.0, 0.0), Vec2::new(0.0, 3000.0)]];
+        let map = EmissionMap::new(texture(Filter::Linear), Vec3::ONE, &triangles()[..1], huge);
+        assert!(map
+            .as_ref()
+            .is_some_and(|m| m.cut(0, MAX_CELLS).is_none() && !m.is_exact()));
+    }
 }

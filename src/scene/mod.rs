@@ -16,6 +16,7 @@ mod checks;
 #[cfg(feature = "gltf")]
 mod cornell;
 mod directional;
+mod emission_cells;
 mod emission_map;
 mod emissive;
 #[cfg(feature = "gltf")]
@@ -51,7 +52,7 @@ pub use gltf_images::MAX_TEXELS;
 pub use gltf_load::LoadOptions;
 
 pub use directional::DirectionalLight;
-pub use emission_map::MAX_PIECES;
+pub use emission_map::MAX_CELLS;
 pub use light::{AreaLight, EmittedPhoton, Light, LightPoint, PointLight, SpotLight};
 pub use prepared::PreparedScene;
 pub use surface::{consistent_with_geometry, SurfacePoint, SurfaceSampler};
