@@ -60,6 +60,9 @@ struct Piece {
     area: f32,
 }
 
+/// A triangle's pieces with their powers, and the cells it examined.
+type Cut = (Vec<(Piece, [f64; 3])>, usize);
+
 /// A point sampled on a textured light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct MapSample {
@@ -198,7 +201,7 @@ impl EmissionMap {
     /// Triangle `t` cut along the cells, each piece with its power, and the
     /// cells of its bounding box; `None` when those are more than `budget`
     /// or its uv map is degenerate.
-    fn cut(&self, t: usize, budget: usize) -> Option<(Vec<(Piece, [f64; 3])>, usize)> {
+    fn cut(&self, t: usize, budget: usize) -> Option<Cut> {
         let tv = self.texel_space(t);
         let uv_area = self.uv_area(t);
         let (lo, hi) = (tv[0].min(tv[1]).min(tv[2]), tv[0].max(tv[1]).max(tv[2]));

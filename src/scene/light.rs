@@ -15,7 +15,7 @@
 //! Punctual lights have no area: the adaptive mode uses `alpha_A = 1` for them.
 //!
 //! An area light with an emissive texture ([`AreaLight::is_textured`],
-//! [`super::emission_map`]) has a radiance `L0(x)` that varies over its
+//! `scene::emission_map`) has a radiance `L0(x)` that varies over its
 //! surface: its power is `sides (2 pi / (n + 2)) integral L0 dA`, summed
 //! over the texels, and its points are sampled by emitted power, each
 //! photon weighted by its point's radiance over the pdf.
@@ -132,6 +132,14 @@ impl AreaLight {
 
     /// Emitted power per channel: `sides (2 pi / (n + 2)) integral L0 dA`,
     /// the texels' sum for a textured light ([`Self::power_is_exact`]).
+    ///
+    /// Used for: the share of photons each light emits (`engine::counts`:
+    /// `N_MAX P_l / sum P`, and the adaptive mode's `alpha_E`), each
+    /// photon's power (`power / N` times the sample's weight), the
+    /// renderer's light choice (its share by power), and the scene's checks
+    /// ([`super::Scene::validate`]). Only the photon powers need it exact for
+    /// the map to be unbiased; a textured light's weights use its true
+    /// radiance over the true pdf, so even an approximate power cancels.
     pub fn power(&self) -> Vec3 {
         self.radiance_integral()
             * self.emission.profile.projected_integral()

@@ -1,5 +1,5 @@
 //! Points on an area light for light sampling at a surface, and what a
-//! textured light ([`super::super::emission_map`]) adds: its radiance and
+//! textured light (`scene::emission_map`) adds: its radiance and
 //! area pdf at any point, its power's integral.
 
 use super::super::emission_map::{EmissionMap, MapSample};
@@ -25,7 +25,7 @@ pub struct LightPoint {
 
 impl AreaLight {
     /// The light with its radiance read from an emissive texture
-    /// ([`super::super::emission_map`]); `None` when no texel it covers emits.
+    /// (`scene::emission_map`); `None` when no texel it covers emits.
     pub(crate) fn with_map(
         mut self,
         build: impl FnOnce(&[[Vec3; 3]]) -> Option<EmissionMap>,
@@ -41,7 +41,7 @@ impl AreaLight {
 
     /// Whether [`Self::power`] is exact: always for an untextured light; for
     /// a textured one, when every triangle was cut along the texels
-    /// ([`super::super::emission_map`]).
+    /// (`scene::emission_map`).
     pub fn power_is_exact(&self) -> bool {
         self.map.as_ref().is_none_or(|m| m.is_exact())
     }
