@@ -277,12 +277,13 @@ impl<'a> Ctx<'a> {
         let l = self.light_samples;
         let mut sum = Vec3::ZERO;
         for j in 0..l {
-            let u = px.get_2d(dim::LIGHT, sample * l + j, self.spp * l);
-            sum += self.lights.sample(
+            let (i, n) = (sample * l + j, self.spp * l);
+            sum += self.lights.sample_with(
                 &s.brdf,
                 [s.position, s.normal, s.shading, s.wo],
                 self.eps,
-                u,
+                px.get_2d(dim::LIGHT, i, n),
+                || px.get_2d(dim::LIGHT_POINT, i, n),
             );
         }
         sum / l as f32

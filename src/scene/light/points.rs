@@ -90,7 +90,7 @@ impl AreaLight {
     /// `u_pos` the point in it).
     pub fn sample_point(&self, u_tri: f32, u_pos: [f32; 2]) -> LightPoint {
         match &self.map {
-            Some(m) => self.map_point(m, m.sample_in(m.pick(u_tri).0, u_pos)),
+            Some(m) => self.map_point(m, m.sample_in(m.pick(u_tri), u_pos)),
             None => {
                 let i = self.triangle_at(u_tri * self.area);
                 let [a, b, c] = self.triangles[i];
@@ -116,25 +116,6 @@ impl AreaLight {
             triangle: s.triangle,
             radiance: m.radiance(s.triangle, s.bary),
             pdf_area: s.pdf_area,
-        }
-    }
-
-    /// [`Self::sample_point`] from one 2D point, for stratified light
-    /// sampling: `u[0]` picks the piece (or triangle) and, rescaled within
-    /// it, joins `u[1]` to place the point.
-    pub fn sample_point_2d(&self, u: [f32; 2]) -> LightPoint {
-        match &self.map {
-            Some(m) => {
-                let (k, r) = m.pick(u[0]);
-                self.map_point(m, m.sample_in(k, [r, u[1]]))
-            }
-            None => {
-                let i = self.triangle_at(u[0] * self.area);
-                let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
-                let r = ((u[0] * self.area - lo) / (self.cdf[i] - lo).max(1e-30))
-                    .clamp(0.0, 0.999_999_9);
-                self.sample_point(u[0], [r, u[1]])
-            }
         }
     }
 }
