@@ -39,6 +39,7 @@ use super::emission_cells::{running_ticks, Poly, TICKS};
 use super::texture::{Encoding, Filter, Texture};
 use crate::sampling::{luminance, uniform_triangle};
 use glam::{DVec2, Vec2, Vec3};
+use std::sync::Arc;
 
 /// The most texel cells one light's triangles may cover (their texel
 /// bounding boxes, summed): at most this many pieces (16 bytes and 4 of
@@ -76,7 +77,8 @@ pub(crate) struct MapSample {
 /// A textured light's radiance and its power distribution.
 #[derive(Clone, PartialEq)]
 pub(crate) struct EmissionMap {
-    texture: Texture,
+    /// Shared by the lights of every mesh that reads it.
+    texture: Arc<Texture>,
     factor: Vec3,
     /// Per triangle, the transformed texture coordinates of its vertices.
     uvs: Vec<[Vec2; 3]>,
@@ -108,7 +110,7 @@ impl EmissionMap {
     /// The map of `texture` times `factor` over `triangles` with texture
     /// coordinates `uvs` (transformed); `None` when the light emits nothing.
     pub(crate) fn new(
-        texture: Texture,
+        texture: Arc<Texture>,
         factor: Vec3,
         triangles: &[[Vec3; 3]],
         uvs: Vec<[Vec2; 3]>,
@@ -466,7 +468,8 @@ mod tests {
                     Vec2::new(-0.2, 1.1),
                 ],
             ];
-            let map = EmissionMap::new(texture(filter), Vec3::ONE, &triangles(), uvs).unwrap();
+            let map =
+                EmissionMap::new(Arc::new(texture(filter)), Vec3::ONE, &triangles(), uvs).unwrap();
             assert!(map.is_exact() && map.piece_count() > 20);
             let sum: f64 = (0..map.piece_count()).map(|k| map.probability(k)).sum();
             assert!((sum - 1.0).abs() < 1e-12);
@@ -500,13 +503,24 @@ mod tests {
         let p = Vec2::new(0.3, 0.6);
         let tex = texture(Filter::Nearest);
         let texel = tex.sample(p, Encoding::Srgb).truncate();
-        let map = EmissionMap::new(tex, Vec3::splat(2.0), &triangles()[..1], vec![[p; 3]]).unwrap();
+        let map = EmissionMap::new(
+            Arc::new(tex),
+            Vec3::splat(2.0),
+            &triangles()[..1],
+            vec![[p; 3]],
+        )
+        .unwrap();
         assert_eq!(map.piece_count(), 1);
         assert!(!map.is_exact());
         let want = texel * 2.0 * 1.5;
         assert!((map.integral() - want).abs().max_element() < 1e-5 * want.max_element());
         let huge = vec![[Vec2::ZERO, Vec2::new(3000.0, 0.0), Vec2::new(0.0, 3000.0)]];
-        let map = EmissionMap::new(texture(Filter::Linear), Vec3::ONE, &triangles()[..1], huge);
+        let map = EmissionMap::new(
+            Arc::new(texture(Filter::Linear)),
+            Vec3::ONE,
+            &triangles()[..1],
+            huge,
+        );
         assert!(map
             .as_ref()
             .is_some_and(|m| m.cut(0, MAX_CELLS).is_none() && !m.is_exact()));

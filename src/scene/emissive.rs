@@ -17,11 +17,12 @@
 //! sampling ([`super::AreaLight::sample_point`] and its pdf).
 
 use super::emission_map::EmissionMap;
-use super::texture::{Encoding, TextureRef};
+use super::texture::{Encoding, Texture, TextureRef};
 use super::{checks, Light, Scene};
 use crate::error::{Error, Result};
 use crate::raycast::Hit;
 use glam::{Vec2, Vec3};
+use std::sync::Arc;
 
 impl Scene {
     /// Gives emissive material `material` an emissive texture (an index in
@@ -123,18 +124,18 @@ impl Scene {
         else {
             return Ok(());
         };
-        let Light::Area(light) = &self.lights[slot] else {
-            return Ok(());
-        };
-        let texture = self.textures[r.texture].clone();
         let factor = self.materials[m.material]
             .emission
             .map_or(Vec3::ZERO, |e| e.radiance);
-        let textured = light
-            .clone()
-            .with_map(|triangles| EmissionMap::new(texture, factor, triangles, per_triangle));
+        let Light::Area(light) = self.lights[slot].clone() else {
+            return Ok(());
+        };
+        let texture = self.shared_texture(r.texture);
         let name = &self.meshes[mesh].name;
-        let light = match textured {
+        let light = match light
+            .clone()
+            .with_map(|triangles| EmissionMap::new(texture, factor, triangles, per_triangle))
+        {
             Some(l) => l,
             None => {
                 // Nothing it covers emits: a light of no power (it takes
@@ -142,12 +143,7 @@ impl Scene {
                 self.warnings.push(format!(
                     "emissive mesh `{name}`: every texel of its emissive texture that it covers is black: it emits nothing"
                 ));
-                let Light::Area(l) = &self.lights[slot] else {
-                    return Ok(());
-                };
-                let mut dark = l.clone();
-                dark.emission.radiance = Vec3::ZERO;
-                dark
+                light.dark()
             }
         };
         if let Some(why) = checks::power_problem(light.power()) {
@@ -157,6 +153,17 @@ impl Scene {
         }
         self.lights[slot] = Light::Area(light);
         Ok(())
+    }
+
+    /// Texture `i` behind an `Arc`, copied once however many lights read it
+    /// (a hundred primitives sharing a 4k emissive texture would otherwise
+    /// hold a hundred copies of its 64 MB).
+    fn shared_texture(&mut self, i: usize) -> Arc<Texture> {
+        if self.shared_textures.len() <= i {
+            self.shared_textures.resize(i + 1, None);
+        }
+        let texture = &self.textures[i];
+        Arc::clone(self.shared_textures[i].get_or_insert_with(|| Arc::new(texture.clone())))
     }
 
     /// Checks that every mesh has the texture coordinates its material's

@@ -312,6 +312,8 @@ pub struct Scene {
     pub(crate) material_maps: Vec<Option<MaterialMaps>>,
     /// Per material, its emissive texture (`None`, or past the end: none).
     pub(crate) emission_textures: Vec<Option<TextureRef>>,
+    /// Emissive textures as their lights share them (one copy each).
+    pub(crate) shared_textures: Vec<Option<std::sync::Arc<Texture>>>,
     /// Bounds of every kept triangle's vertices, `None` before the first
     /// mesh: kept as meshes are added, so that directional lights can be
     /// refitted to it without a pass over all the geometry.

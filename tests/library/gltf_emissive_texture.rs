@@ -603,6 +603,23 @@ fn dark_and_broken_emissive_textures() {
     let s = load(&doc);
     assert_eq!(s.lights().len(), 1);
     assert!(s.warnings().join("\n").contains("emissiveFactor of zero"));
+    // A texture bright elsewhere, the lamp covering its black texel only
+    // (scale 0.5: the top-left quarter): a light of no power, and a warning.
+    let png = png_rgb(2, 2, &[[0, 0, 0], [255; 3], [255; 3], [255; 3]]);
+    let info = json!({"index": 0, "extensions": {"KHR_texture_transform": {"scale": [0.5, 0.5]}}});
+    let mut doc = lamp_scene(Some((&png, NEAREST_CLAMP)), info, [1.0; 3], true);
+    let other = other_material(&mut doc);
+    let m = doc.mesh(&p, &i, 4, Some(other));
+    doc.node(json!({"mesh": m, "translation": [0.0, 1.5, 0.0]}));
+    let s = load(&doc);
+    assert_eq!(s.lights()[0].power(), Vec3::ZERO);
+    assert!(s.lights()[1].power().x > 0.0);
+    assert!(
+        s.warnings().join("\n").contains("that it covers is black"),
+        "{:?}",
+        s.warnings()
+    );
+    let png = png_rgb(2, 2, &sixteen()[..4]);
     let doc = lamp_scene(
         Some((&png, NEAREST_CLAMP)),
         json!({"index": 0, "texCoord": 1}),

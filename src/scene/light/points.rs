@@ -34,6 +34,13 @@ impl AreaLight {
         Some(self)
     }
 
+    /// The light emitting nothing (its texture covers only black texels).
+    pub(crate) fn dark(mut self) -> Self {
+        self.map = None;
+        self.emission.radiance = Vec3::ZERO;
+        self
+    }
+
     /// Whether an emissive texture sets the radiance.
     pub fn is_textured(&self) -> bool {
         self.map.is_some()
