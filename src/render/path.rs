@@ -4,7 +4,8 @@
 //! # Estimator
 //! From the camera, a path is followed surface to surface:
 //! - at every non-delta vertex, **next-event estimation**: one sample of
-//!   every light (area lights: an area-uniform point and a shadow ray; point
+//!   every light (area lights: an area-uniform point, or by emitted power
+//!   on a light with an emissive texture, and a shadow ray; point
 //!   and spot lights: their intensity over `r^2`; directional lights: their
 //!   irradiance `E`, the shadow ray unbounded towards them). Point, spot and
 //!   directional lights are deltas that no BRDF sample can hit, so their
@@ -13,7 +14,8 @@
 //!   reaches adds its emission. Area-light emission is counted by both
 //!   strategies, so both are weighted by **multiple importance sampling**
 //!   (power heuristic, one sample of each: `w = p^2 / (p_light^2 + p_brdf^2)`,
-//!   the light's pdf in solid angle `r^2 / (cos_l A)`); after a mirror, or
+//!   the light's pdf in solid angle `r^2 / (cos_l A)`, `r^2 p_A(y) / cos_l`
+//!   on a textured light whose area pdf at `y` is `p_A(y)`); after a mirror, or
 //!   from the camera, the emission counts fully (light sampling cannot find it);
 //! - **Russian roulette** from the [`RR_START`]-th non-delta vertex on:
 //!   survival `q = min(max(throughput), 0.95)`, the survivor divided by `q`.

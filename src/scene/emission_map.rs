@@ -18,10 +18,9 @@
 //! A triangle whose texel bounding box holds more cells than the light's
 //! budget has left ([`MAX_CELLS`] cells examined per light, which bounds
 //! both the work and the memory), or whose texture coordinates are
-//! degenerate (no area
-//! in uv), is one piece whose integral is a midpoint rule over 256
-//! sub-triangles: the light's power estimate is then approximate, the
-//! photons' power is not (below).
+//! degenerate (no area in uv), is one piece whose integral is a midpoint
+//! rule over 256 sub-triangles: the light's power estimate is then
+//! approximate, the photons' power is not (below).
 //!
 //! # Sampling
 //! A piece is chosen with probability `ticks / 2^24`, its ticks in

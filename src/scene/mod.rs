@@ -1,6 +1,7 @@
 //! The scene model: triangle meshes with a material each, area lights made of
-//! emissive meshes with a `cos^n` profile, punctual lights (point, spot and
-//! directional), and an optional camera.
+//! emissive meshes with a `cos^n` profile (their radiance varying over the
+//! surface with an emissive texture: [`Scene::set_emission_texture`]),
+//! punctual lights (point, spot and directional), and an optional camera.
 //!
 //! Scenes come from glTF 2.0 files (`Scene::load`), from the built-in Cornell box
 //! (`Scene::cornell`; both with the feature `gltf`), or are assembled in code
