@@ -16,7 +16,7 @@ use crate::photon_map::{CompactPhoton, PhotonRecord, Quantizer};
 use crate::raycast::{BadHit, Hit, Ray, RayCaster};
 use crate::rng::{hash2, Rng};
 use crate::sampling::{luminance, Frame};
-use crate::scene::{consistent_with_geometry, Scene};
+use crate::scene::{consistent_with_geometry, photon_shading_factor, Scene};
 use glam::Vec3;
 use std::sync::Arc;
 
@@ -181,7 +181,14 @@ fn shade_hit<C>(
     if !ctx.continue_paths {
         return;
     }
-    let n = ctx.scene.scattering_normal(brdf, h, from_inside);
+    let side = ctx.scene.scattering_normal(brdf, h, from_inside);
+    let n = match brdf.is_specular() {
+        true => side,
+        false => ctx.scene.shading_side(h, side, -p.direction),
+    };
+    // Flux through a shading normal takes the adjoint's factor (none on
+    // the geometric normal, where it is 1).
+    let shading_normal = n != side;
     let frame = Frame::from_normal(n);
     let wi = frame.local_from_world(-p.direction);
     // The classic survival probability: the largest channel of the albedo
@@ -213,11 +220,18 @@ fn shade_hit<C>(
         let Some(bs) = brdf.sample(wi, rng.next_2d()) else {
             continue;
         };
-        let child_power = power * bs.weight * scale;
+        let direction = frame.world_from_local(bs.wo).normalize();
+        let mut child_power = power * bs.weight * scale;
+        if shading_normal {
+            // A sample under the surface is dropped, as camera paths drop theirs.
+            if direction.dot(side) <= 0.0 {
+                continue;
+            }
+            child_power *= photon_shading_factor(h.ng, n, -p.direction, direction);
+        }
         if !child_power.is_finite() || child_power.max_element() <= 0.0 {
             continue;
         }
-        let direction = frame.world_from_local(bs.wo).normalize();
         if specular
             && !consistent_with_geometry(h.ng, -p.direction, direction, bs.wo.z * wi.z < 0.0)
         {

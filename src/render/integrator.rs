@@ -101,23 +101,6 @@ impl<'a> Ctx<'a> {
         }
     }
 
-    /// The shading normal at `h`, on the side of `normal` (the flipped
-    /// geometric normal), and facing `wo` (else the geometric one is used).
-    fn shading_normal(&self, h: &Hit, normal: Vec3, wo: Vec3) -> Vec3 {
-        let Some(mesh) = self.scene.meshes.get(h.geom_id as usize) else {
-            return normal;
-        };
-        let Some(ns) = mesh.shading_normal(h.prim_id as usize, h.u, h.v) else {
-            return normal;
-        };
-        let ns = if ns.dot(normal) < 0.0 { -ns } else { ns };
-        if ns.dot(wo) > 0.0 {
-            ns
-        } else {
-            normal
-        }
-    }
-
     /// Follows `ray` through mirrors and glass to its first non-specular
     /// hit (camera paths carry radiance: [`Transport::Radiance`]). Emission
     /// seen at hit `first_emission` (0 = the first hit) and later is added
@@ -151,7 +134,7 @@ impl<'a> Ctx<'a> {
                 return Some(SurfaceHit {
                     position,
                     normal,
-                    shading: self.shading_normal(&h, normal, wo),
+                    shading: self.scene.shading_side(&h, normal, wo),
                     wo,
                     material_index: h.material as usize,
                     brdf: self.scene.surface_brdf(&h)?,

@@ -258,7 +258,8 @@ impl<'a> PathTracer<'a> {
             let Some(brdf) = self.scene.surface_brdf(&h) else {
                 break;
             };
-            let frame = Frame::from_normal(normal);
+            let shading = self.scene.shading_side(&h, normal, wo);
+            let frame = Frame::from_normal(shading);
             let wo_l = frame.local_from_world(wo);
             st.non_delta += 1;
             // Past the first non-delta vertex there is no direct light left.
@@ -271,7 +272,7 @@ impl<'a> PathTracer<'a> {
                 Class::Indirect
             };
             if part.counts(nee_class, show_emitters) {
-                l += beta * next_event(self, &brdf, [pos, normal, wo], rng);
+                l += beta * next_event(self, &brdf, [pos, normal, shading, wo], rng);
             }
             let Some(bs) = brdf.sample(wo_l, rng.next_2d()) else {
                 break;
@@ -287,8 +288,13 @@ impl<'a> PathTracer<'a> {
             if !(beta.max_element() > 0.0) || !beta.is_finite() {
                 break;
             }
+            let out = frame.world_from_local(bs.wo);
+            // A shading normal can send a sample under the surface: dropped.
+            if out.dot(normal) <= 0.0 {
+                break;
+            }
             prev = (!bs.specular).then_some((pos, bs.pdf));
-            ray = Ray::new(pos + normal * self.eps, frame.world_from_local(bs.wo));
+            ray = Ray::new(pos + normal * self.eps, out);
         }
         l
     }

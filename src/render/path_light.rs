@@ -27,17 +27,19 @@ pub(super) fn area_light_pdf(from: Vec3, at: Vec3, cos_l: f32, area: f32) -> f32
     }
 }
 
-/// Radiance reflected at `x` (unit normal `n` on the ray's side) towards `wo`
-/// by one sample of each light, shadow rays included.
+/// Radiance reflected at `x` towards `wo` by one sample of each light,
+/// shadow rays included: `ng` is the geometric normal on the ray's side,
+/// `n` the shading normal the BRDF is evaluated about
+/// ([`crate::scene::Scene::shading_side`]).
 pub(super) fn next_event(
     pt: &PathTracer,
     brdf: &Brdf,
-    [x, n, wo]: [Vec3; 3],
+    [x, ng, n, wo]: [Vec3; 4],
     rng: &mut Rng,
 ) -> Vec3 {
     let frame = Frame::from_normal(n);
     let wo_l = frame.local_from_world(wo);
-    let origin = x + n * pt.eps;
+    let origin = x + ng * pt.eps;
     let mut sum = Vec3::ZERO;
     for light in &pt.scene.lights {
         // (where the light comes from, incoming radiance or intensity / r^2
@@ -71,7 +73,7 @@ pub(super) fn next_event(
         };
         let wi = source.direction_from(x);
         let cos_x = wi.dot(n);
-        if cos_x <= 0.0 || !(li.max_element() > 0.0) {
+        if cos_x <= 0.0 || wi.dot(ng) <= 0.0 || !(li.max_element() > 0.0) {
             continue;
         }
         let wi_l = frame.local_from_world(wi);

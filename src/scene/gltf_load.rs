@@ -233,6 +233,7 @@ fn load_node(
             }
             let prim_label = format!("{mesh_label} primitive {pi}");
             super::gltf_textures::load_texcoords(scene, index, &prim, buffers, &prim_label)?;
+            super::gltf_textures::load_tangents(scene, index, &prim, buffers, world)?;
         }
     }
     if let Some(light) = node.light() {

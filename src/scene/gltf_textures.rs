@@ -1,10 +1,11 @@
 //! A glTF material's textures: which are read ([`super::textured`]: base
-//! colour and metallic-roughness, on opaque materials), the images decoded
+//! colour and metallic-roughness, on opaque materials; normal textures,
+//! [`super::normal_map`]), the images decoded
 //! once per texture, and the texture coordinates of the meshes that use
 //! them (and of those an emissive texture reads: [`super::gltf_emissive`]).
 //! What is not modelled is named in the scene's warnings instead of
-//! being dropped silently: normal textures, `alphaMode` MASK
-//! and BLEND, and the textures of mirrors and glass.
+//! being dropped silently: `alphaMode` MASK and BLEND, and the base colour
+//! and metallic-roughness textures of mirrors and glass.
 //!
 //! Images come from a `bufferView` (a GLB's usual form) or a `data:` URI.
 //! Image files (`uri: "wood.png"`, `../textures/wood.png`) are read like
@@ -12,6 +13,7 @@
 
 use super::assets::AssetRoot;
 use super::gltf_images::{decode, MAX_TEXELS};
+use super::normal_map::NormalMap;
 use super::texture::{Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
 use super::textured::MaterialMaps;
 use super::Scene;
@@ -74,24 +76,73 @@ impl<'a> TextureLoader<'a> {
         warn_unmodelled(m, &label, scene);
         let pbr = m.pbr_metallic_roughness();
         let (base, mr) = (pbr.base_color_texture(), pbr.metallic_roughness_texture());
-        if base.is_none() && mr.is_none() {
+        let normal = m.normal_texture();
+        if base.is_none() && mr.is_none() && normal.is_none() {
             return Ok(None);
         }
-        if specular {
-            scene.warnings.push(format!(
-                "{label}: its textures are not read (a mirror or glass scatters by its factors)"
-            ));
+        // A mirror or glass bends its normals, but scatters by its factors.
+        let (base, mr) = match specular && (base.is_some() || mr.is_some()) {
+            true => {
+                scene.warnings.push(format!(
+                    "{label}: its base colour and metallic-roughness textures are not read \
+                     (a mirror or glass scatters by its factors)"
+                ));
+                (None, None)
+            }
+            false => (base, mr),
+        };
+        if base.is_none() && mr.is_none() && normal.is_none() {
             return Ok(None);
         }
         let mut load = |info: Option<gltf::texture::Info>| -> Result<Option<TextureRef>> {
             info.map(|i| self.texture_ref(&i, scene)).transpose()
         };
-        let maps = MaterialMaps {
-            factors,
-            base_color: load(base)?,
-            metallic_roughness: load(mr)?,
+        let base_color = load(base)?;
+        let metallic_roughness = load(mr)?;
+        let normal = match normal {
+            Some(n) => Some(self.normal_map(&n, scene)?),
+            None => None,
         };
-        Ok(Some(maps))
+        Ok(Some(MaterialMaps {
+            factors,
+            base_color,
+            metallic_roughness,
+            normal,
+        }))
+    }
+
+    /// The scene texture of glTF texture `t`, loaded on first use.
+    fn scene_texture(&mut self, t: &gltf::Texture, scene: &mut Scene) -> Result<usize> {
+        if let Some(&i) = self.loaded.get(&t.index()) {
+            return Ok(i);
+        }
+        let texture = self.load(t)?;
+        let i = scene.add_texture(texture);
+        self.loaded.insert(t.index(), i);
+        Ok(i)
+    }
+
+    /// A `normalTexture`: not a `textureInfo` in the gltf crate, so its
+    /// `KHR_texture_transform` is read from the extension's JSON (checked
+    /// by [`check_json`]).
+    fn normal_map(
+        &mut self,
+        n: &gltf::material::NormalTexture,
+        scene: &mut Scene,
+    ) -> Result<NormalMap> {
+        let texture = self.scene_texture(&n.texture(), scene)?;
+        let (transform, set) = match n.extension_value(TRANSFORM) {
+            Some(v) => transform_of_json(v)?,
+            None => (TexTransform::default(), None),
+        };
+        Ok(NormalMap {
+            texture: TextureRef {
+                texture,
+                tex_coord: set.unwrap_or(n.tex_coord()) as usize,
+                transform,
+            },
+            scale: n.scale(),
+        })
     }
 
     pub(super) fn texture_ref(
@@ -99,16 +150,7 @@ impl<'a> TextureLoader<'a> {
         info: &gltf::texture::Info,
         scene: &mut Scene,
     ) -> Result<TextureRef> {
-        let t = info.texture();
-        let index = match self.loaded.get(&t.index()) {
-            Some(&i) => i,
-            None => {
-                let texture = self.load(&t)?;
-                let i = scene.add_texture(texture);
-                self.loaded.insert(t.index(), i);
-                i
-            }
-        };
+        let index = self.scene_texture(&info.texture(), scene)?;
         let (transform, tex_coord) = match info.texture_transform() {
             Some(x) => (
                 TexTransform {
@@ -167,9 +209,6 @@ pub(super) fn material_label(m: &gltf::Material) -> String {
 /// Warns of the parts of `m` the loader reads but does not model.
 fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
     let mut ignored = Vec::new();
-    if m.normal_texture().is_some() {
-        ignored.push("its normalTexture (it is shaded with the mesh's normals)");
-    }
     match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => {}
         gltf::material::AlphaMode::Mask => ignored.push("alphaMode MASK (it is opaque)"),
@@ -193,7 +232,13 @@ pub(super) fn load_texcoords(
 ) -> Result<()> {
     let material = scene.meshes[mesh].material;
     let maps = scene.material_maps(material);
-    let refs = maps.map_or([None, None], |m| [m.base_color, m.metallic_roughness]);
+    let refs = maps.map_or([None, None, None], |m| {
+        [
+            m.base_color,
+            m.metallic_roughness,
+            m.normal.map(|n| n.texture),
+        ]
+    });
     let emissive = scene.emission_texture(material).copied();
     let mut sets: Vec<usize> = refs
         .iter()
@@ -217,6 +262,40 @@ pub(super) fn load_texcoords(
         scene.set_texcoords(mesh, set, uvs)?;
     }
     Ok(())
+}
+
+/// Gives mesh `mesh` of `scene` the tangents its material's normal texture
+/// needs: primitive `prim`'s `TANGENT`s in world space `world` (the
+/// handedness flips with a mirroring transform, as the bitangent must
+/// follow the mirrored surface), else MikkTSpace's.
+pub(super) fn load_tangents(
+    scene: &mut Scene,
+    mesh: usize,
+    prim: &gltf::Primitive,
+    buffers: &[Vec<u8>],
+    world: &glam::Mat4,
+) -> Result<()> {
+    let material = scene.meshes[mesh].material;
+    let Some(map) = scene.material_maps(material).and_then(|m| m.normal) else {
+        return Ok(());
+    };
+    let Some(accessor) = prim.get(&gltf::mesh::Semantic::Tangents) else {
+        // A valid file may have texture coordinates that give no tangent
+        // (all equal): it loads, shaded with its unbent normals.
+        if let Err(e) = scene.generate_tangents(mesh, map.texture.tex_coord) {
+            scene
+                .warnings
+                .push(format!("{e}; its normal texture is not applied"));
+        }
+        return Ok(());
+    };
+    let linear = glam::Mat3::from_mat4(*world);
+    let sign = linear.determinant().signum();
+    let tangents = super::gltf_quantized::read_f32_vectors::<4>(&accessor, buffers)?
+        .into_iter()
+        .map(|[x, y, z, w]| (linear * glam::Vec3::new(x, y, z)).extend(w * sign))
+        .collect();
+    scene.set_vertex_tangents(mesh, tangents)
 }
 
 /// The most texture coordinate sets a material may name (`TEXCOORD_0` to
@@ -246,12 +325,11 @@ pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
         {
             check_info(root, &name, info)?;
         }
-        let others = [
-            m.normal_texture.as_ref().map(|t| t.index),
-            m.occlusion_texture.as_ref().map(|t| t.index),
-        ];
-        for index in others.into_iter().flatten() {
-            check_index(&name, "texture", index.value(), root.textures.len())?;
+        if let Some(n) = &m.normal_texture {
+            check_normal_texture(root, &name, n)?;
+        }
+        if let Some(o) = &m.occlusion_texture {
+            check_index(&name, "texture", o.index.value(), root.textures.len())?;
         }
     }
     for (i, t) in root.textures.iter().enumerate() {
@@ -285,6 +363,78 @@ pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The extension a `normalTexture`'s transform is read from.
+const TRANSFORM: &str = "KHR_texture_transform";
+
+fn check_normal_texture(
+    root: &gltf::json::Root,
+    name: &str,
+    n: &gltf::json::material::NormalTexture,
+) -> Result<()> {
+    check_index(name, "texture", n.index.value(), root.textures.len())?;
+    let transform = n.extensions.as_ref().and_then(|e| e.others.get(TRANSFORM));
+    let set = match transform {
+        Some(v) => {
+            transform_of_json(v)
+                .map_err(|e| Error::InvalidScene(format!("{name}'s normalTexture: {e}")))?
+                .1
+        }
+        None => None,
+    };
+    let set = set.unwrap_or(n.tex_coord);
+    if set >= MAX_TEXCOORD_SETS {
+        return Err(Error::InvalidScene(format!(
+            "{name} reads TEXCOORD_{set}; at most {MAX_TEXCOORD_SETS} sets are read"
+        )));
+    }
+    if !n.scale.is_finite() {
+        return Err(Error::InvalidScene(format!(
+            "{name} has a normalTexture scale that is not finite"
+        )));
+    }
+    Ok(())
+}
+
+/// A `KHR_texture_transform` object as JSON: the transform, and the
+/// `texCoord` it overrides (if any).
+fn transform_of_json(v: &serde_json::Value) -> Result<(TexTransform, Option<u32>)> {
+    let bad = |what: &str| Error::InvalidScene(format!("a KHR_texture_transform has {what}"));
+    let number = |x: &serde_json::Value| x.as_f64().map(|f| f as f32).filter(|f| f.is_finite());
+    let pair = |key: &str, default: Vec2| -> Result<Vec2> {
+        match v.get(key) {
+            None => Ok(default),
+            Some(serde_json::Value::Array(a)) if a.len() == 2 => {
+                match (number(&a[0]), number(&a[1])) {
+                    (Some(x), Some(y)) => Ok(Vec2::new(x, y)),
+                    _ => Err(bad(&format!("a {key} that is not two finite numbers"))),
+                }
+            }
+            Some(_) => Err(bad(&format!("a {key} that is not two finite numbers"))),
+        }
+    };
+    if !v.is_object() {
+        return Err(bad("a value that is not an object"));
+    }
+    let rotation = match v.get("rotation") {
+        None => 0.0,
+        Some(r) => number(r).ok_or_else(|| bad("a rotation that is not a finite number"))?,
+    };
+    let set = match v.get("texCoord") {
+        None => None,
+        Some(t) => Some(
+            t.as_u64()
+                .and_then(|t| u32::try_from(t).ok())
+                .ok_or_else(|| bad("a texCoord that is not a small non-negative integer"))?,
+        ),
+    };
+    let transform = TexTransform {
+        offset: pair("offset", Vec2::ZERO)?,
+        rotation,
+        scale: pair("scale", Vec2::ONE)?,
+    };
+    Ok((transform, set))
 }
 
 fn check_index(name: &str, kind: &str, i: usize, len: usize) -> Result<()> {

@@ -37,6 +37,7 @@ mod gltf_quantized;
 #[cfg(feature = "gltf")]
 mod gltf_textures;
 mod light;
+pub mod normal_map;
 mod prepared;
 mod surface;
 pub mod texture;
@@ -55,8 +56,9 @@ pub use gltf_load::LoadOptions;
 pub use directional::DirectionalLight;
 pub use emission_map::MAX_CELLS;
 pub use light::{AreaLight, EmittedPhoton, Light, LightPoint, PointLight, SpotLight};
+pub use normal_map::NormalMap;
 pub use prepared::PreparedScene;
-pub use surface::{consistent_with_geometry, SurfacePoint, SurfaceSampler};
+pub use surface::{consistent_with_geometry, photon_shading_factor, SurfacePoint, SurfaceSampler};
 pub use texture::{Encoding, Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
 pub use textured::{flat_base_color, MaterialMaps};
 
@@ -64,7 +66,7 @@ use crate::brdf::Brdf;
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use crate::sampling::luminance;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 #[cfg(feature = "gltf")]
 use std::path::Path;
 
@@ -184,6 +186,9 @@ pub struct Mesh {
     /// Per-vertex texture coordinates by set (`texcoords[n]` is glTF's
     /// `TEXCOORD_n`; empty when absent; [`Scene::set_texcoords`]).
     pub texcoords: Vec<Vec<Vec2>>,
+    /// Tangents (xyz, world space) and handedness (w) by triangle corner,
+    /// for a normal texture; empty without one ([`normal_map`]).
+    pub tangents: Vec<[Vec4; 3]>,
 }
 
 impl Mesh {
@@ -490,6 +495,7 @@ impl Scene {
             material,
             normals: Vec::new(),
             texcoords: Vec::new(),
+            tangents: Vec::new(),
         };
         let light = match emission {
             Some(e) => Some(checks::area_light(&mesh, self.meshes.len(), e)?),
@@ -781,6 +787,7 @@ mod area_tests {
             material: 0,
             normals: Vec::new(),
             texcoords: Vec::new(),
+            tangents: Vec::new(),
         };
         assert!((mesh.area() - 100.0).abs() < 1e-3, "{}", mesh.area());
     }

@@ -113,8 +113,8 @@ impl Scene {
     /// arrived on the side opposite the winding normal). For a transmitting
     /// model it is the outside of the object (the winding side); for a
     /// reflecting one the side the ray arrives from (surfaces are
-    /// two-sided). Specular models (mirrors, glass) use the interpolated
-    /// shading normal when the mesh has normals, so that a smooth sphere
+    /// two-sided). Specular models (mirrors, glass) use the shading normal
+    /// ([`Scene::shading_normal`]) when the mesh has one, so that a smooth sphere
     /// reflects and refracts as a sphere, not as its facets; the others the
     /// geometric normal. Photons and camera paths use the same frame.
     pub fn scattering_normal(&self, brdf: &Brdf, h: &Hit, from_inside: bool) -> Vec3 {
@@ -126,12 +126,45 @@ impl Scene {
         if !brdf.is_specular() {
             return side;
         }
-        self.meshes
-            .get(h.geom_id as usize)
-            .and_then(|m| m.shading_normal(h.prim_id as usize, h.u, h.v))
+        self.shading_normal(h)
             .map(|ns| if ns.dot(side) < 0.0 { -ns } else { ns })
             .unwrap_or(side)
     }
+
+    /// The normal a non-specular BRDF is evaluated and sampled about at hit
+    /// `h`, seen along `toward` (the direction back to the camera, or back
+    /// to where a photon came from): the shading normal turned to face
+    /// `toward`, or `side` (the geometric normal on that side) on a mesh
+    /// without one. The renderer, the path tracer and the photon tracer
+    /// share it, and each drops the directions below `side`'s surface, so
+    /// that the BRDF they see is one reciprocal function: the model in the
+    /// shading frame, for two directions on the same side of the shading
+    /// normal and of the geometric one. (Turning to `side` instead, or
+    /// falling back to `side` where the shading normal faces away, would
+    /// make the frame depend on which end a path starts from, and photons
+    /// and camera paths would solve different equations.)
+    pub fn shading_side(&self, h: &Hit, side: Vec3, toward: Vec3) -> Vec3 {
+        match self.shading_normal(h) {
+            Some(ns) if ns.dot(toward) < 0.0 => -ns,
+            Some(ns) => ns,
+            None => side,
+        }
+    }
+}
+
+/// The factor that makes photon (flux) transport through a shading normal
+/// the adjoint of camera transport (Veach 1997, §5.3; pbrt's
+/// `CorrectShadingNormal`): a photon arriving from `back` (unit, pointing
+/// back along its path) and leaving along `out`, sampled about the
+/// shading normal `ns` by a sampler whose weight carries `|out.ns|`, is
+/// multiplied by `|back.ns| |out.ng| / (|back.ng| |out.ns|)`. Camera paths
+/// need no factor: their cosine is the shading one. 0 where a cosine is 0.
+pub fn photon_shading_factor(ng: Vec3, ns: Vec3, back: Vec3, out: Vec3) -> f32 {
+    let denominator = back.dot(ng).abs() * out.dot(ns).abs();
+    if denominator.is_nan() || denominator <= 0.0 {
+        return 0.0;
+    }
+    back.dot(ns).abs() * out.dot(ng).abs() / denominator
 }
 
 /// Whether a specular sample in a shading frame is consistent with the

@@ -198,6 +198,11 @@ impl Texture {
         self.height
     }
 
+    /// The texels, row by row from the top (as the image stores them).
+    pub fn texels(&self) -> &[[u8; 4]] {
+        &self.texels
+    }
+
     /// Texel `(i, j)` (wrapped) decoded to [0, 1].
     pub(crate) fn texel(&self, i: i64, j: i64, encoding: Encoding) -> Vec4 {
         let x = wrap_index(i, self.width, self.sampler.wrap_u);

@@ -21,6 +21,7 @@
 //! by material), and a texel that would make a metal polished enough to be
 //! a mirror gives the sharpest lobe instead (roughness 0.0317).
 
+use super::normal_map::NormalMap;
 use super::texture::{Encoding, Texture, TextureRef};
 use super::Scene;
 use crate::brdf::{from_gltf_material, Brdf, GltfMaterial, Lambert};
@@ -43,11 +44,17 @@ pub struct MaterialMaps {
     /// `pbrMetallicRoughness.metallicRoughnessTexture` (linear; roughness
     /// in green, metalness in blue).
     pub metallic_roughness: Option<TextureRef>,
+    /// `normalTexture` (linear; [`super::normal_map`]).
+    pub normal: Option<NormalMap>,
 }
 
 impl MaterialMaps {
     fn refs(&self) -> impl Iterator<Item = &TextureRef> {
-        self.base_color.iter().chain(&self.metallic_roughness)
+        let normal = self.normal.as_ref().map(|n| &n.texture);
+        self.base_color
+            .iter()
+            .chain(&self.metallic_roughness)
+            .chain(normal)
     }
 
     /// The factors at texels `base` (decoded RGBA) and `mr`.
@@ -121,9 +128,12 @@ impl Scene {
             mean(&maps.base_color, Encoding::Srgb),
             mean(&maps.metallic_roughness, Encoding::Linear),
         );
-        let brdf = from_gltf_material(&at_mean)
-            .map_err(|e| Error::InvalidScene(format!("material `{name}`: {e}")))?;
-        self.materials[material].brdf = brdf;
+        // A normal texture alone leaves the BRDF (a mirror's or glass's too).
+        if maps.base_color.is_some() || maps.metallic_roughness.is_some() {
+            let brdf = from_gltf_material(&at_mean)
+                .map_err(|e| Error::InvalidScene(format!("material `{name}`: {e}")))?;
+            self.materials[material].brdf = brdf;
+        }
         if self.material_maps.len() <= material {
             self.material_maps.resize(material + 1, None);
         }
@@ -148,7 +158,8 @@ impl Scene {
         // A point keeps its material's class: the tracer, the renderer and
         // the path tracer decide per material where photons are stored and
         // where paths pass through (module docs).
-        if material.brdf.is_specular() {
+        let untextured = maps.base_color.is_none() && maps.metallic_roughness.is_none();
+        if material.brdf.is_specular() || untextured {
             return Some(material.brdf);
         }
         let read = |r: &Option<TextureRef>, e| {

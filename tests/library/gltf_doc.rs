@@ -91,6 +91,17 @@ impl Doc {
             json!(self.accessors.len() - 1);
     }
 
+    /// Adds `TANGENT` values to primitive 0 of mesh `mesh`.
+    pub(crate) fn tangents(&mut self, mesh: usize, t: &[[f32; 4]]) {
+        let bytes: Vec<u8> = t.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+        let v = self.view(&bytes);
+        self.accessors.push(
+            json!({"bufferView": v, "componentType": 5126, "count": t.len(), "type": "VEC4"}),
+        );
+        self.meshes[mesh]["primitives"][0]["attributes"]["TANGENT"] =
+            json!(self.accessors.len() - 1);
+    }
+
     /// Adds a texture of the PNG `png` read through sampler `sampler` (a
     /// sampler's JSON) and returns its index.
     pub(crate) fn texture(&mut self, png: &[u8], sampler: Value) -> usize {
@@ -136,10 +147,43 @@ impl Doc {
         if !self.extensions_used.is_empty() {
             doc["extensionsUsed"] = json!(self.extensions_used);
         }
+        // KHR_mesh_quantization changes what accessors may hold: a file that
+        // uses it must require it (the Khronos validator: NON_REQUIRED_EXTENSION).
+        if self.extensions_used.contains(&"KHR_mesh_quantization") {
+            doc["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+        }
         let path = dir.join("scene.gltf");
         std::fs::write(&path, doc.to_string()).unwrap();
+        dump_for_the_validator(&doc);
         path
     }
+}
+
+/// The folder that `scripts/ci-gltf-validator-generated.sh` has the tests
+/// copy every document they write into, for the Khronos validator.
+pub(crate) const DUMP_ENV: &str = "ADAPTIVE_PM_GLTF_DUMP";
+
+/// With [`DUMP_ENV`] set, keeps a copy of `doc` named after the test that
+/// wrote it and its rank among that test's documents (tests run one per
+/// thread, so the names are the same from run to run).
+fn dump_for_the_validator(doc: &Value) {
+    let Ok(dir) = std::env::var(DUMP_ENV) else {
+        return;
+    };
+    thread_local! {
+        static WRITTEN: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+    }
+    let rank = WRITTEN.with(|w| {
+        w.set(w.get() + 1);
+        w.get()
+    });
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("unnamed")
+        .replace("::", "__");
+    let dir = PathBuf::from(dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join(format!("{test}-{rank}.gltf")), doc.to_string()).unwrap();
 }
 
 /// A unit square in the plane y = 0, wound to face +y (`up`) or -y.

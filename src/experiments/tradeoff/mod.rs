@@ -22,7 +22,8 @@
 //!   [`crate::render::PathPart::Indirect`].
 //! - (b) `image_rel_rmse`: the full image (emitters hidden).
 //! - (c) `points_rel_err`: irradiance at [`TradeoffConfig::points`] fixed
-//!   area-uniform points on the non-emitting surfaces, read from the full map
+//!   area-uniform points on the surfaces that neither emit nor are specular
+//!   (a map stores nothing on mirrors and glass), read from the full map
 //!   alone (no pixels, no light sampling); the reference is the direct
 //!   light's quadrature plus path-traced indirect irradiance.
 //!
