@@ -141,7 +141,7 @@ fn hand_power(
 fn the_power_is_the_sum_over_the_texels() {
     let texels = sixteen();
     let png = png_rgb(4, 4, &texels);
-    let f = [0.9, 1.5, 2.0];
+    let f = [0.9, 0.6, 0.3];
     let f64s = f.map(f64::from);
     // The whole texture once: each texel a sixteenth of the unit square.
     let s = load(&lamp_scene(
@@ -501,7 +501,7 @@ fn a_ray_that_hits_the_lamp_sees_its_texel() {
         2,
         &[[255, 40, 0], [30, 200, 90], [120, 120, 255], [0, 0, 0]],
     );
-    let f = [2.0, 1.0, 0.5];
+    let f = [1.0, 0.6, 0.4];
     let s = load(&lamp_scene(
         Some((&png, NEAREST_CLAMP)),
         json!({"index": 0}),
