@@ -183,3 +183,67 @@ impl Scene {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::brdf::Lambert;
+    use crate::emitter::CosN;
+    use crate::scene::texture::Sampler;
+    use crate::scene::{Emission, Material};
+    use std::f32::consts::PI;
+
+    /// A unit square lamp (two triangles) of a material emitting 1, its
+    /// mesh index, and a 2 x 1 texture: white, black.
+    fn lamp() -> (Scene, usize, TextureRef) {
+        let mut s = Scene::new();
+        let m = s.add_material(Material {
+            name: "lamp".into(),
+            brdf: Lambert::new(Vec3::splat(0.5)).unwrap().into(),
+            emission: Some(Emission::new(Vec3::ONE, CosN::new(0.0).unwrap())),
+        });
+        let p = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        let positions = p.iter().map(|&[x, z]| Vec3::new(x, 0.0, z)).collect();
+        s.add_mesh("lamp", positions, vec![[0, 2, 1], [0, 3, 2]], m)
+            .unwrap();
+        let texels = vec![[255, 255, 255, 255], [0, 0, 0, 255]];
+        let t = s.add_texture(Texture::new(2, 1, texels, Sampler::default()).unwrap());
+        let r = TextureRef {
+            texture: t,
+            tex_coord: 0,
+            transform: Default::default(),
+        };
+        (s, m, r)
+    }
+
+    /// In code, the texture may come before or after the coordinates: the
+    /// light is rebuilt either way, half its power gone with the black half
+    /// (bilinear REPEAT over one tile: the mean of the texels).
+    #[test]
+    fn the_light_follows_the_texture_and_the_coordinates_in_either_order() {
+        let uvs = vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y];
+        let (mut s, m, r) = lamp();
+        assert!(s.validate().is_ok());
+        s.set_emission_texture(m, r).unwrap();
+        let e = s.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("no TEXCOORD_0") && e.contains("emissive texture"),
+            "{e}"
+        );
+        s.set_texcoords(0, 0, uvs.clone()).unwrap();
+        let (mut t, m2, r2) = lamp();
+        t.set_texcoords(0, 0, uvs).unwrap();
+        t.set_emission_texture(m2, r2).unwrap();
+        for scene in [&s, &t] {
+            scene.validate().unwrap();
+            let Light::Area(a) = &scene.lights()[0] else {
+                panic!("an area light")
+            };
+            assert!(a.is_textured());
+            assert!((a.power() - Vec3::splat(0.5 * PI)).abs().max_element() < 1e-5);
+        }
+        assert!(s.set_emission_texture(9, r).is_err());
+        let bad = TextureRef { texture: 5, ..r };
+        assert!(s.set_emission_texture(m, bad).is_err());
+    }
+}
