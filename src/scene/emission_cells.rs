@@ -1,7 +1,8 @@
 //! The geometry and arithmetic under [`super::emission_map`]: convex
-//! polygons clipped along texel cells, and the integer ticks of the piece
-//! choice.
+//! polygons clipped along texel cells, a texture's exact integral over
+//! one, and the integer ticks of the piece choice.
 
+use super::texture::{Encoding, Filter, Texture};
 use glam::DVec2;
 
 /// Ticks of the piece choice: `u * TICKS` is exact for a 24-bit float.
@@ -91,6 +92,62 @@ pub(super) fn running_ticks(powers: &[f64]) -> Option<Vec<u32>> {
             })
             .collect(),
     )
+}
+
+/// `integral texel duv` over `poly` inside cell `[i, j]` of `texture`
+/// (sRGB-decoded RGB): the texel times the area (`NEAREST`), or the
+/// three-edge-midpoint rule over a fan of `poly`, exact for the bilinear
+/// blend of the cell's four texels (degree 2).
+pub(super) fn cell_integral(texture: &Texture, poly: &Poly, [i, j]: [i32; 2]) -> [f64; 3] {
+    let texel = |di: i32, dj: i32| {
+        let t = texture.texel(
+            i64::from(i) + i64::from(di),
+            i64::from(j) + i64::from(dj),
+            Encoding::Srgb,
+        );
+        [t.x, t.y, t.z].map(f64::from)
+    };
+    let mut s = [0.0f64; 3];
+    match texture.sampler.filter {
+        Filter::Nearest => {
+            let (t, a) = (texel(0, 0), poly.area());
+            (0..3).for_each(|c| s[c] = t[c] * a);
+        }
+        Filter::Linear => {
+            let corners = [texel(0, 0), texel(1, 0), texel(0, 1), texel(1, 1)];
+            let origin = DVec2::new(f64::from(i), f64::from(j));
+            for (t, a) in poly.fan() {
+                for (p, q) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                    let m = (p + q) * 0.5 - origin;
+                    let w = [
+                        (1.0 - m.x) * (1.0 - m.y),
+                        m.x * (1.0 - m.y),
+                        (1.0 - m.x) * m.y,
+                        m.x * m.y,
+                    ];
+                    for c in 0..3 {
+                        s[c] += a / 3.0 * (0..4).map(|k| w[k] * corners[k][c]).sum::<f64>();
+                    }
+                }
+            }
+        }
+    }
+    s
+}
+
+/// Row `j` of triangle `tri`: the strip of it between `y = j` and `j + 1`,
+/// and the columns that strip spans; `None` when it misses the row.
+pub(super) fn row(tri: &Poly, j: i32) -> Option<(i32, Poly, std::ops::Range<i32>)> {
+    let strip = tri
+        .clip(1, f64::from(j), 1.0)
+        .clip(1, f64::from(j) + 1.0, -1.0);
+    if strip.n < 3 {
+        return None;
+    }
+    let (x0, x1) = (0..strip.n).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), k| {
+        (a.min(strip.v[k].x), b.max(strip.v[k].x))
+    });
+    Some((j, strip, x0.floor() as i32..x1.ceil() as i32))
 }
 
 #[cfg(test)]

@@ -15,9 +15,9 @@
 //! pieces, so [`super::AreaLight::power`] is the sum over the texels the
 //! mesh covers, up to rounding.
 //!
-//! A triangle whose texel bounding box holds more cells than the light's
-//! budget has left ([`MAX_CELLS`] cells examined per light, which bounds
-//! both the work and the memory), or whose texture coordinates are
+//! A triangle that crosses more cells than the light's budget has left
+//! ([`MAX_CELLS`] cells examined per light, which bounds both the work and
+//! the memory), or whose texture coordinates are
 //! degenerate (no area in uv), is one piece whose integral is a midpoint
 //! rule over 256 sub-triangles: the light's power estimate is then
 //! approximate, the photons' power is not (below).
@@ -34,16 +34,18 @@
 //! error of a piece's power estimate, since the weight uses the true
 //! radiance at the point and the true pdf.
 
-use super::emission_cells::{running_ticks, Poly, TICKS};
+use super::emission_cells::{cell_integral, row, running_ticks, Poly, TICKS};
 use super::texture::{Encoding, Filter, Texture};
 use crate::sampling::{luminance, uniform_triangle};
 use glam::{DVec2, Vec2, Vec3};
 use std::sync::Arc;
 
-/// The most texel cells one light's triangles may cover (their texel
-/// bounding boxes, summed): at most this many pieces (16 bytes and 4 of
-/// ticks each), and this many polygon clips to build them.
-pub const MAX_CELLS: usize = 1 << 20;
+/// The most texel cells one light's triangles may cross, summed: at most
+/// this many pieces (16 bytes, and 4 of ticks, each: 160 MB at most), and
+/// this many polygon clips to build them. A 2k x 2k texture over a quad
+/// (4.2M cells) is cut exactly; a 4k one is cut until the budget runs out,
+/// its remaining triangles whole.
+pub const MAX_CELLS: usize = 1 << 23;
 
 /// The cell of a piece that is a whole triangle.
 const WHOLE: [i32; 2] = [i32::MIN, i32::MIN];
@@ -200,35 +202,27 @@ impl EmissionMap {
     }
 
     /// Triangle `t` cut along the cells, each piece with its power, and the
-    /// cells of its bounding box; `None` when those are more than `budget`
-    /// or its uv map is degenerate.
+    /// cells its rows cross; `None` when those (or its rows) are more than
+    /// `budget`, or its uv map is degenerate.
     fn cut(&self, t: usize, budget: usize) -> Option<Cut> {
         let tv = self.texel_space(t);
         let uv_area = self.uv_area(t);
         let (lo, hi) = (tv[0].min(tv[1]).min(tv[2]), tv[0].max(tv[1]).max(tv[2]));
         let span = (hi - lo).max_element().max(1.0);
         let sane = lo.abs().max(hi.abs()).max_element() < MAX_TEXEL_COORDINATE;
-        if !(sane && uv_area > 1e-9 * span * span) {
+        if !(sane && uv_area > 1e-9 * span * span) || hi.y.ceil() - lo.y.floor() > budget as f64 {
             return None;
         }
-        let cells = (hi.x.ceil() - lo.x.floor()).max(1.0) * (hi.y.ceil() - lo.y.floor()).max(1.0);
-        if cells > budget as f64 {
+        let tri = Poly::triangle(tv);
+        let rows = (lo.y.floor() as i32..hi.y.ceil() as i32).filter_map(|j| row(&tri, j));
+        let cells: usize = rows.clone().map(|(_, _, i)| i.len()).sum();
+        if cells > budget {
             return None;
         }
         let scale = f64::from(self.areas[t]) / uv_area;
-        let tri = Poly::triangle(tv);
         let mut out = Vec::new();
-        for j in lo.y.floor() as i32..hi.y.ceil() as i32 {
-            let strip = tri
-                .clip(1, f64::from(j), 1.0)
-                .clip(1, f64::from(j) + 1.0, -1.0);
-            let (x0, x1) = (0..strip.n).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), k| {
-                (a.min(strip.v[k].x), b.max(strip.v[k].x))
-            });
-            if strip.n < 3 {
-                continue;
-            }
-            for i in x0.floor() as i32..x1.ceil() as i32 {
+        for (j, strip, columns) in rows {
+            for i in columns {
                 let poly = strip
                     .clip(0, f64::from(i), 1.0)
                     .clip(0, f64::from(i) + 1.0, -1.0);
@@ -236,7 +230,9 @@ impl EmissionMap {
                 if area <= 0.0 {
                     continue;
                 }
-                let power = self.cell_integral(&poly, [i, j]).map(|p| p * scale);
+                let f = [self.factor.x, self.factor.y, self.factor.z].map(f64::from);
+                let power = cell_integral(&self.texture, &poly, [i, j]);
+                let power = std::array::from_fn(|c| power[c] * f[c] * scale);
                 let piece = Piece {
                     triangle: t as u32,
                     cell: [i, j],
@@ -245,46 +241,7 @@ impl EmissionMap {
                 out.push((piece, power));
             }
         }
-        Some((out, cells as usize))
-    }
-
-    /// `integral texel duv` over `poly` inside cell `[i, j]`, times the factor.
-    fn cell_integral(&self, poly: &Poly, [i, j]: [i32; 2]) -> [f64; 3] {
-        let texel = |di: i32, dj: i32| {
-            let t = self.texture.texel(
-                i64::from(i) + i64::from(di),
-                i64::from(j) + i64::from(dj),
-                Encoding::Srgb,
-            );
-            [t.x, t.y, t.z].map(f64::from)
-        };
-        let mut s = [0.0f64; 3];
-        match self.texture.sampler.filter {
-            Filter::Nearest => {
-                let (t, a) = (texel(0, 0), poly.area());
-                (0..3).for_each(|c| s[c] = t[c] * a);
-            }
-            Filter::Linear => {
-                let corners = [texel(0, 0), texel(1, 0), texel(0, 1), texel(1, 1)];
-                let origin = DVec2::new(f64::from(i), f64::from(j));
-                for (t, a) in poly.fan() {
-                    for (p, q) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                        let m = (p + q) * 0.5 - origin;
-                        let w = [
-                            (1.0 - m.x) * (1.0 - m.y),
-                            m.x * (1.0 - m.y),
-                            (1.0 - m.x) * m.y,
-                            m.x * m.y,
-                        ];
-                        for c in 0..3 {
-                            s[c] += a / 3.0 * (0..4).map(|k| w[k] * corners[k][c]).sum::<f64>();
-                        }
-                    }
-                }
-            }
-        }
-        let f = [self.factor.x, self.factor.y, self.factor.z].map(f64::from);
-        [s[0] * f[0], s[1] * f[1], s[2] * f[2]]
+        Some((out, cells))
     }
 
     /// Triangle `t` as one piece, its power by a midpoint rule over 256
