@@ -110,6 +110,8 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
                 "cosn": match l { Light::Area(a) => Some(a.emission.profile.exponent()), _ => None },
                 "two_sided": match l { Light::Area(a) => Some(a.emission.two_sided), _ => None },
                 "mesh": match l { Light::Area(a) => Some(scene.meshes()[a.mesh].name.clone()), _ => None },
+                "emissive_texture_pieces": match l { Light::Area(a) if a.is_textured() => Some(a.piece_count()), _ => None },
+                "power_exact": match l { Light::Area(a) => Some(a.power_is_exact()), _ => None },
                 "position": l.position().map(|p| [p.x, p.y, p.z]),
                 "direction": direction_of(l).map(|d| [d.x, d.y, d.z]),
                 "irradiance": match l { Light::Directional(d) => Some(d.irradiance().to_array()), _ => None },

@@ -25,8 +25,11 @@
 //!   absorption); a value outside its range, partial transmission and
 //!   transmission on a metal are refused, naming the material.
 //! - Base colour and metallic-roughness textures multiply their factors
-//!   ([`super::gltf_textures`], [`super::textured`]); emissive and normal
-//!   textures and `alphaMode` are named in [`Scene::warnings`], not modelled.
+//!   ([`super::gltf_textures`], [`super::textured`]); so does an
+//!   `emissiveTexture` the emission, making an area light whose radiance
+//!   varies over its surface, sampled by emitted power
+//!   ([`super::gltf_emissive`], [`super::emissive`]). Normal textures and
+//!   `alphaMode` are named in [`Scene::warnings`], not modelled.
 //! - `NORMAL` gives smooth shading normals ([`Scene::set_vertex_normals`]).
 //! - `KHR_mesh_quantization`: POSITION, NORMAL and TEXCOORD_n may be 8- or
 //!   16-bit integers ([`super::gltf_quantized`]): normalized ones are
@@ -119,6 +122,7 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
         if let Some(maps) = textures.maps_of(&m, factors, specular, &mut scene)? {
             scene.set_material_maps(id, maps)?;
         }
+        super::gltf_emissive::read_emissive(&m, id, &mut textures, &mut scene)?;
         material_ids.push(id);
     }
     let mut default_material = None;

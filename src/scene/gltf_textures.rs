@@ -2,9 +2,10 @@
 //! colour and metallic-roughness, on opaque materials; normal textures,
 //! [`super::normal_map`]), the images decoded
 //! once per texture, and the texture coordinates of the meshes that use
-//! them. What is not modelled is named in the scene's warnings instead of
-//! being dropped silently: emissive textures, `alphaMode` MASK and BLEND,
-//! and the textures of mirrors and glass.
+//! them (and of those an emissive texture reads: [`super::gltf_emissive`]).
+//! What is not modelled is named in the scene's warnings instead of
+//! being dropped silently: `alphaMode` MASK and BLEND, and the base colour
+//! and metallic-roughness textures of mirrors and glass.
 //!
 //! Images come from a `bufferView` (a GLB's usual form) or a `data:` URI.
 //! Image files (`uri: "wood.png"`, `../textures/wood.png`) are read like
@@ -144,7 +145,11 @@ impl<'a> TextureLoader<'a> {
         })
     }
 
-    fn texture_ref(&mut self, info: &gltf::texture::Info, scene: &mut Scene) -> Result<TextureRef> {
+    pub(super) fn texture_ref(
+        &mut self,
+        info: &gltf::texture::Info,
+        scene: &mut Scene,
+    ) -> Result<TextureRef> {
         let index = self.scene_texture(&info.texture(), scene)?;
         let (transform, tex_coord) = match info.texture_transform() {
             Some(x) => (
@@ -194,7 +199,7 @@ impl<'a> TextureLoader<'a> {
     }
 }
 
-fn material_label(m: &gltf::Material) -> String {
+pub(super) fn material_label(m: &gltf::Material) -> String {
     match m.index() {
         Some(i) => super::gltf_checks::label("material", i, m.name()),
         None => "the default material".to_string(),
@@ -204,9 +209,6 @@ fn material_label(m: &gltf::Material) -> String {
 /// Warns of the parts of `m` the loader reads but does not model.
 fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
     let mut ignored = Vec::new();
-    if m.emissive_texture().is_some() {
-        ignored.push("its emissiveTexture (it emits its emissiveFactor everywhere)");
-    }
     match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => {}
         gltf::material::AlphaMode::Mask => ignored.push("alphaMode MASK (it is opaque)"),
@@ -229,12 +231,18 @@ pub(super) fn load_texcoords(
     label: &str,
 ) -> Result<()> {
     let material = scene.meshes[mesh].material;
-    let Some(maps) = scene.material_maps(material) else {
-        return Ok(());
-    };
-    let normal = maps.normal.map(|n| n.texture);
-    let mut sets: Vec<usize> = [maps.base_color, maps.metallic_roughness, normal]
+    let maps = scene.material_maps(material);
+    let refs = maps.map_or([None, None, None], |m| {
+        [
+            m.base_color,
+            m.metallic_roughness,
+            m.normal.map(|n| n.texture),
+        ]
+    });
+    let emissive = scene.emission_texture(material).copied();
+    let mut sets: Vec<usize> = refs
         .iter()
+        .chain([&emissive])
         .flatten()
         .map(|r| r.tex_coord)
         .collect();

@@ -204,7 +204,7 @@ impl Texture {
     }
 
     /// Texel `(i, j)` (wrapped) decoded to [0, 1].
-    fn texel(&self, i: i64, j: i64, encoding: Encoding) -> Vec4 {
+    pub(crate) fn texel(&self, i: i64, j: i64, encoding: Encoding) -> Vec4 {
         let x = wrap_index(i, self.width, self.sampler.wrap_u);
         let y = wrap_index(j, self.height, self.sampler.wrap_v);
         let [r, g, b, a] = self.texels[y * self.width as usize + x];

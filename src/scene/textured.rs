@@ -99,7 +99,8 @@ impl Scene {
             m.texcoords.resize(set + 1, Vec::new());
         }
         m.texcoords[set] = uvs;
-        Ok(())
+        // An emissive texture reading this set now shapes the mesh's light.
+        self.texture_area_light(mesh)
     }
 
     /// Textures material `material`, and sets its [`super::Material::brdf`]

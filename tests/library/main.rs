@@ -24,6 +24,7 @@ mod glass_transport;
 mod gltf_asset_root;
 mod gltf_conformance;
 mod gltf_doc;
+mod gltf_emissive_texture;
 mod gltf_glass;
 mod gltf_normal_texture;
 mod gltf_quantized;
