@@ -1,14 +1,17 @@
 //! A glTF material's textures: which are read ([`super::textured`]: base
-//! colour and metallic-roughness, on opaque materials), the images decoded
-//! once per texture, and the texture coordinates of the meshes that use
-//! them. What is not modelled is named in the scene's warnings instead of
-//! being dropped silently: emissive and normal textures, `alphaMode` MASK
-//! and BLEND, and the textures of mirrors and glass.
+//! colour and metallic-roughness, on opaque materials), its alpha mask
+//! ([`super::alpha`]: `alphaMode: MASK`, `alphaCutoff`, the alpha of
+//! `baseColorFactor` and `baseColorTexture`), the images decoded once per
+//! texture, and the texture coordinates of the meshes that use them. What
+//! is not modelled is named in the scene's warnings instead of being dropped
+//! silently: emissive and normal textures, `alphaMode` BLEND (traced as
+//! OPAQUE), and the colour textures of mirrors and glass.
 //!
 //! Images come from a `bufferView` (a GLB's usual form) or a `data:` URI.
 //! Image files (`uri: "wood.png"`, `../textures/wood.png`) are read like
 //! buffers: only inside the scene's asset root (see [`super::assets`]).
 
+use super::alpha::AlphaMask;
 use super::assets::AssetRoot;
 use super::gltf_images::{decode, MAX_TEXELS};
 use super::texture::{Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
@@ -78,7 +81,8 @@ impl<'a> TextureLoader<'a> {
         }
         if specular {
             scene.warnings.push(format!(
-                "{label}: its textures are not read (a mirror or glass scatters by its factors)"
+                "{label}: its textures are not read (a mirror or glass scatters by its factors; \
+                 only an alphaMode MASK reads the base colour texture's alpha)"
             ));
             return Ok(None);
         }
@@ -91,6 +95,28 @@ impl<'a> TextureLoader<'a> {
             metallic_roughness: load(mr)?,
         };
         Ok(Some(maps))
+    }
+
+    /// The alpha mask of material `m` when it is `alphaMode: MASK`: its
+    /// `alphaCutoff` (default 0.5; checked by [`check_json`]), the alpha of
+    /// `baseColorFactor`, and `baseColorTexture` (loaded here if the colour
+    /// maps did not load it; a mirror's or glass's texture is read for its
+    /// alpha alone).
+    pub(super) fn mask_of(
+        &mut self,
+        m: &gltf::Material,
+        scene: &mut Scene,
+    ) -> Result<Option<AlphaMask>> {
+        if m.alpha_mode() != gltf::material::AlphaMode::Mask {
+            return Ok(None);
+        }
+        let pbr = m.pbr_metallic_roughness();
+        let cutoff = m.alpha_cutoff().unwrap_or(AlphaMask::DEFAULT_CUTOFF);
+        let mask = AlphaMask::new(cutoff, pbr.base_color_factor()[3]);
+        Ok(Some(match pbr.base_color_texture() {
+            Some(info) => mask.with_texture(self.texture_ref(&info, scene)?),
+            None => mask,
+        }))
     }
 
     fn texture_ref(&mut self, info: &gltf::texture::Info, scene: &mut Scene) -> Result<TextureRef> {
@@ -168,10 +194,10 @@ fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
     if m.normal_texture().is_some() {
         ignored.push("its normalTexture (it is shaded with the mesh's normals)");
     }
-    match m.alpha_mode() {
-        gltf::material::AlphaMode::Opaque => {}
-        gltf::material::AlphaMode::Mask => ignored.push("alphaMode MASK (it is opaque)"),
-        gltf::material::AlphaMode::Blend => ignored.push("alphaMode BLEND (it is opaque)"),
+    if m.alpha_mode() == gltf::material::AlphaMode::Blend {
+        // MASK is modelled (`TextureLoader::mask_of`); BLEND's partial
+        // coverage is not (docs/scenes.md).
+        ignored.push("alphaMode BLEND (it is traced as OPAQUE: alpha is ignored)");
     }
     for what in ignored {
         scene
@@ -190,11 +216,14 @@ pub(super) fn load_texcoords(
     label: &str,
 ) -> Result<()> {
     let material = scene.meshes[mesh].material;
-    let Some(maps) = scene.material_maps(material) else {
-        return Ok(());
-    };
-    let mut sets: Vec<usize> = [maps.base_color, maps.metallic_roughness]
+    let maps = scene
+        .material_maps(material)
+        .map(|m| [m.base_color, m.metallic_roughness])
+        .unwrap_or_default();
+    let mask = scene.alpha_mask(material).and_then(|m| m.texture);
+    let mut sets: Vec<usize> = maps
         .iter()
+        .chain(&[mask])
         .flatten()
         .map(|r| r.tex_coord)
         .collect();
@@ -231,6 +260,15 @@ pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
         let name = label("material", i, m.name.as_deref());
         if !matches!(m.alpha_mode, Checked::Valid(_)) {
             return bad(format!("{name} has an unknown alphaMode"));
+        }
+        // The schema's minimum; checked whatever the mode (a JSON number too
+        // large for an f32 reads as infinity).
+        if let Some(c) = m.alpha_cutoff.map(|c| c.0) {
+            if !(c.is_finite() && c >= 0.0) {
+                return bad(format!(
+                    "{name} has the alphaCutoff {c}: it must be a finite number >= 0"
+                ));
+            }
         }
         let pbr = &m.pbr_metallic_roughness;
         for info in [

@@ -8,6 +8,7 @@
 //! Only what the scene uses is modelled: the directionality analysis later runs on
 //! the emitters and materials found here, nothing else.
 
+mod alpha;
 #[cfg(feature = "gltf")]
 mod assets;
 #[cfg(feature = "gltf")]
@@ -46,6 +47,7 @@ pub use gltf_images::MAX_TEXELS;
 #[cfg(feature = "gltf")]
 pub use gltf_load::LoadOptions;
 
+pub use alpha::{AlphaMask, Cutout};
 pub use directional::DirectionalLight;
 pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
 pub use prepared::PreparedScene;
@@ -304,6 +306,8 @@ pub struct Scene {
     pub(crate) textures: Vec<Texture>,
     /// Per material, its textures (`None`, or past the end: untextured).
     pub(crate) material_maps: Vec<Option<MaterialMaps>>,
+    /// Per material, its alpha mask (`None`, or past the end: opaque).
+    pub(crate) alpha_masks: Vec<Option<AlphaMask>>,
     /// Bounds of every kept triangle's vertices, `None` before the first
     /// mesh: kept as meshes are added, so that directional lights can be
     /// refitted to it without a pass over all the geometry.
