@@ -283,9 +283,15 @@ fn photon_mean_with(
 /// the path tracer's mean from its halves pixel by pixel.
 #[test]
 fn photon_and_path_renders_agree_within_the_photon_bias() {
+    assert_photon_and_path_agree(Scene::cornell().unwrap());
+}
+
+/// The check of [`photon_and_path_renders_agree_within_the_photon_bias`] on
+/// any scene with a camera (also run on a Cornell box with an alpha-masked
+/// fence, `gltf_alpha_mask.rs`).
+pub(crate) fn assert_photon_and_path_agree(scene: Scene) {
     let device = Device::new().unwrap();
-    let scene = Scene::cornell().unwrap();
-    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
+    let prepared = Arc::new(scene.commit(&device).unwrap());
     let (keep, path, path_se) = path_reference(&prepared, 24, 256);
     let n = 50_000;
     let runs = |n_max: u64| {
