@@ -6,7 +6,8 @@
 //! (`Scene::cornell`; both with the feature `gltf`), or are assembled in code
 //! ([`Scene::new`], [`Scene::add_mesh`]).
 //! Only what the scene uses is modelled: the directionality analysis later runs on
-//! the emitters and materials found here, nothing else.
+//! the emitters and materials found here, nothing else. A material may cut
+//! holes (glTF `alphaMode: MASK`, [`AlphaMask`]) that rays pass through.
 
 mod alpha;
 #[cfg(feature = "gltf")]
