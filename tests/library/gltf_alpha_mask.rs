@@ -239,6 +239,37 @@ fn maps_through_holes_are_the_same_on_any_threads_batch_and_kernel() {
     assert_eq!(run(&cfg, 2, true), base, "one ray at a time");
 }
 
+/// Whether `(x, z)` lies off the checker squares' edges, where bilinear
+/// filtering blends the two sides.
+fn inside_a_square(x: f32, z: f32) -> bool {
+    let frac = |c: f32| ((c + 2.0) * CHECKS as f32 / 4.0).fract();
+    [frac(x), frac(z)].iter().all(|f| (0.05..0.95).contains(f))
+}
+
+#[test]
+fn no_photon_is_stored_in_a_hole() {
+    let scene = checkered("MASK");
+    let device = Device::new().unwrap();
+    let tracer = Tracer::new(Arc::new(scene.commit(&device).unwrap()));
+    let mut cfg = TraceConfig::new(Mode::Classic, Budget::NMax(50_000));
+    cfg.seed = 4;
+    let records = tracer.trace(&cfg).unwrap().records();
+    let on_plane: Vec<_> = records
+        .iter()
+        .filter(|r| (r.position.y - 1.0).abs() < 1e-3)
+        .collect();
+    assert!(on_plane.len() > 5_000, "{} on the plane", on_plane.len());
+    for r in on_plane {
+        let (x, z) = (r.position.x, r.position.z);
+        if inside_a_square(x, z) {
+            assert!(
+                !checker_clear(x, z),
+                "a photon stored in a hole at ({x}, {z})"
+            );
+        }
+    }
+}
+
 #[test]
 fn surface_points_leave_the_holes_out() {
     let hole = load(&fence_scene(Some(plane_material("MASK", 0.0, false)), None));
@@ -254,10 +285,8 @@ fn surface_points_leave_the_holes_out() {
     let on_plane: Vec<_> = points.iter().filter(|p| p.mesh == 2).collect();
     assert!(!on_plane.is_empty());
     for p in on_plane {
-        // Off the squares' edges, where bilinear filtering blends.
         let (x, z) = (p.position.x, p.position.z);
-        let frac = |c: f32| ((c + 2.0) * CHECKS as f32 / 4.0).fract();
-        if [frac(x), frac(z)].iter().all(|f| (0.05..0.95).contains(f)) {
+        if inside_a_square(x, z) {
             assert!(!checker_clear(x, z), "a point in a hole at ({x}, {z})");
         }
     }
@@ -305,5 +334,8 @@ pub(crate) fn cornell_with_fence() -> Scene {
 fn photon_and_path_renders_agree_through_a_fence() {
     let scene = cornell_with_fence();
     assert!(scene.has_holes());
-    crate::path_tracer::assert_photon_and_path_agree(scene);
+    // Twice the Cornell box's runs: the fence's shadow makes the box darker
+    // and its photon estimate noisier, and the check holds its bound under
+    // 5 % of the mean.
+    crate::path_tracer::assert_photon_and_path_agree(scene, 20);
 }
