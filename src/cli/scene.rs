@@ -94,6 +94,24 @@ fn textures_note(scene: &Scene, material: usize) -> String {
     )
 }
 
+/// A material's alpha mask, for the listing (empty when it has none).
+fn mask_note(scene: &Scene, material: usize) -> String {
+    let Some(mask) = scene.alpha_mask(material) else {
+        return String::new();
+    };
+    let texture = match &mask.texture {
+        Some(r) => format!(
+            " x texture {}'s alpha (TEXCOORD_{})",
+            r.texture, r.tex_coord
+        ),
+        None => String::new(),
+    };
+    format!(
+        "  alpha mask: cutoff {} on factor {}{texture}",
+        mask.cutoff, mask.factor
+    )
+}
+
 pub fn run(args: SceneArgs) -> anyhow::Result<()> {
     let scene = Scene::open_with(&args.scene, &args.assets.options())?;
     let (lo, hi) = scene.bounds();
@@ -124,7 +142,8 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             "scene": args.scene,
             "triangles": scene.triangle_count(),
             "meshes": scene.meshes().len(),
-            "materials": scene.materials().iter().map(|m| json!({"name": m.name, "brdf": brdf_name(&m.brdf), "emissive": m.emission.is_some()})).collect::<Vec<_>>(),
+            "materials": scene.materials().iter().enumerate().map(|(i, m)| json!({"name": m.name, "brdf": brdf_name(&m.brdf), "emissive": m.emission.is_some(),
+                "alpha_cutoff": scene.alpha_mask(i).map(|a| a.cutoff)})).collect::<Vec<_>>(),
             "lights": lights,
             "bounds": {"min": [lo.x, lo.y, lo.z], "max": [hi.x, hi.y, hi.z]},
             "camera": scene.camera().map(|c| json!({"eye": [c.eye.x, c.eye.y, c.eye.z], "forward": [c.forward.x, c.forward.y, c.forward.z], "vfov_deg": c.vfov_deg})),
@@ -158,7 +177,7 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
     println!("materials  {}", scene.materials().len());
     for (i, m) in scene.materials().iter().enumerate() {
         println!(
-            "  {:<16} {}{}{}",
+            "  {:<16} {}{}{}{}",
             m.name,
             brdf_name(&m.brdf),
             if m.emission.is_some() {
@@ -166,7 +185,8 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             } else {
                 ""
             },
-            textures_note(&scene, i)
+            textures_note(&scene, i),
+            mask_note(&scene, i)
         );
     }
     println!("lights     {}", scene.lights().len());

@@ -1,16 +1,19 @@
 //! A glTF material's textures: which are read ([`super::textured`]: base
 //! colour and metallic-roughness, on opaque materials; normal textures,
-//! [`super::normal_map`]), the images decoded
-//! once per texture, and the texture coordinates of the meshes that use
-//! them (and of those an emissive texture reads: [`super::gltf_emissive`]).
-//! What is not modelled is named in the scene's warnings instead of
-//! being dropped silently: `alphaMode` MASK and BLEND, and the base colour
-//! and metallic-roughness textures of mirrors and glass.
+//! [`super::normal_map`]), its alpha mask ([`super::alpha`]: `alphaMode:
+//! MASK`, `alphaCutoff`, the alpha of `baseColorFactor` and
+//! `baseColorTexture`), the images decoded once per texture, and the texture
+//! coordinates of the meshes that use them (and of those an emissive texture
+//! reads: [`super::gltf_emissive`]). What is not modelled is named in the
+//! scene's warnings instead of being dropped silently: `alphaMode` BLEND
+//! (traced as OPAQUE), and the base colour and metallic-roughness textures
+//! of mirrors and glass.
 //!
 //! Images come from a `bufferView` (a GLB's usual form) or a `data:` URI.
 //! Image files (`uri: "wood.png"`, `../textures/wood.png`) are read like
 //! buffers: only inside the scene's asset root (see [`super::assets`]).
 
+use super::alpha::AlphaMask;
 use super::assets::AssetRoot;
 use super::gltf_images::{decode, MAX_TEXELS};
 use super::normal_map::NormalMap;
@@ -85,7 +88,8 @@ impl<'a> TextureLoader<'a> {
             true => {
                 scene.warnings.push(format!(
                     "{label}: its base colour and metallic-roughness textures are not read \
-                     (a mirror or glass scatters by its factors)"
+                     (a mirror or glass scatters by its factors; \
+                     only an alphaMode MASK reads the base colour texture's alpha)"
                 ));
                 (None, None)
             }
@@ -143,6 +147,28 @@ impl<'a> TextureLoader<'a> {
             },
             scale: n.scale(),
         })
+    }
+
+    /// The alpha mask of material `m` when it is `alphaMode: MASK`: its
+    /// `alphaCutoff` (default 0.5; checked by [`check_json`]), the alpha of
+    /// `baseColorFactor`, and `baseColorTexture` (loaded here if the colour
+    /// maps did not load it; a mirror's or glass's texture is read for its
+    /// alpha alone).
+    pub(super) fn mask_of(
+        &mut self,
+        m: &gltf::Material,
+        scene: &mut Scene,
+    ) -> Result<Option<AlphaMask>> {
+        if m.alpha_mode() != gltf::material::AlphaMode::Mask {
+            return Ok(None);
+        }
+        let pbr = m.pbr_metallic_roughness();
+        let cutoff = m.alpha_cutoff().unwrap_or(AlphaMask::DEFAULT_CUTOFF);
+        let mask = AlphaMask::new(cutoff, pbr.base_color_factor()[3]);
+        Ok(Some(match pbr.base_color_texture() {
+            Some(info) => mask.with_texture(self.texture_ref(&info, scene)?),
+            None => mask,
+        }))
     }
 
     pub(super) fn texture_ref(
@@ -209,10 +235,10 @@ pub(super) fn material_label(m: &gltf::Material) -> String {
 /// Warns of the parts of `m` the loader reads but does not model.
 fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
     let mut ignored = Vec::new();
-    match m.alpha_mode() {
-        gltf::material::AlphaMode::Opaque => {}
-        gltf::material::AlphaMode::Mask => ignored.push("alphaMode MASK (it is opaque)"),
-        gltf::material::AlphaMode::Blend => ignored.push("alphaMode BLEND (it is opaque)"),
+    if m.alpha_mode() == gltf::material::AlphaMode::Blend {
+        // MASK is modelled (`TextureLoader::mask_of`); BLEND's partial
+        // coverage is not (docs/scenes.md).
+        ignored.push("alphaMode BLEND (it is traced as OPAQUE: alpha is ignored)");
     }
     for what in ignored {
         scene
@@ -240,9 +266,10 @@ pub(super) fn load_texcoords(
         ]
     });
     let emissive = scene.emission_texture(material).copied();
+    let mask = scene.alpha_mask(material).and_then(|m| m.texture);
     let mut sets: Vec<usize> = refs
         .iter()
-        .chain([&emissive])
+        .chain([&emissive, &mask])
         .flatten()
         .map(|r| r.tex_coord)
         .collect();
@@ -313,6 +340,15 @@ pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
         let name = label("material", i, m.name.as_deref());
         if !matches!(m.alpha_mode, Checked::Valid(_)) {
             return bad(format!("{name} has an unknown alphaMode"));
+        }
+        // The schema's minimum; checked whatever the mode (a JSON number too
+        // large for an f32 reads as infinity).
+        if let Some(c) = m.alpha_cutoff.map(|c| c.0) {
+            if !(c.is_finite() && c >= 0.0) {
+                return bad(format!(
+                    "{name} has the alphaCutoff {c}: it must be a finite number >= 0"
+                ));
+            }
         }
         let pbr = &m.pbr_metallic_roughness;
         for info in [

@@ -7,8 +7,10 @@
 //! (`Scene::cornell`; both with the feature `gltf`), or are assembled in code
 //! ([`Scene::new`], [`Scene::add_mesh`]).
 //! Only what the scene uses is modelled: the directionality analysis later runs on
-//! the emitters and materials found here, nothing else.
+//! the emitters and materials found here, nothing else. A material may cut
+//! holes (glTF `alphaMode: MASK`, [`AlphaMask`]) that rays pass through.
 
+mod alpha;
 #[cfg(feature = "gltf")]
 mod assets;
 #[cfg(feature = "gltf")]
@@ -53,6 +55,7 @@ pub use gltf_images::MAX_TEXELS;
 #[cfg(feature = "gltf")]
 pub use gltf_load::LoadOptions;
 
+pub use alpha::{AlphaMask, Cutout};
 pub use directional::DirectionalLight;
 pub use emission_map::MAX_CELLS;
 pub use light::{AreaLight, EmittedPhoton, Light, LightPoint, PointLight, SpotLight};
@@ -320,6 +323,8 @@ pub struct Scene {
     pub(crate) emission_textures: Vec<Option<TextureRef>>,
     /// Emissive textures as their lights share them (one copy each).
     pub(crate) shared_textures: Vec<Option<std::sync::Arc<Texture>>>,
+    /// Per material, its alpha mask (`None`, or past the end: opaque).
+    pub(crate) alpha_masks: Vec<Option<AlphaMask>>,
     /// Bounds of every kept triangle's vertices, `None` before the first
     /// mesh: kept as meshes are added, so that directional lights can be
     /// refitted to it without a pass over all the geometry.

@@ -90,6 +90,9 @@ pub fn scene_hash(scene: &Scene) -> u64 {
     if scene.emission_textures.iter().any(Option::is_some) {
         h = fnv(format!("{:?}", scene.emission_textures).as_bytes(), h);
     }
+    if scene.alpha_masks.iter().any(Option::is_some) {
+        h = fnv(format!("{:?}", scene.alpha_masks).as_bytes(), h);
+    }
     for t in &scene.textures {
         let head = format!("{}x{} {:?}", t.width(), t.height(), t.sampler);
         h = fnv(head.as_bytes(), h);
