@@ -51,11 +51,22 @@ const INVALID_BUT_ACCEPTED: &[(&str, &str)] = &[];
 /// `scripts/ci-gltf-validator-generated.sh` as `TEST-RANK.gltf`) that the
 /// validator calls valid and the loader refuses on purpose, by the test
 /// that wrote them (a prefix of the file name), and why.
-const GENERATED_VALID_BUT_REFUSED: &[(&str, &str)] = &[(
-    "gltf_textures__bad_texture_data_is_refused_by_name-5",
-    "a sampler's wrapS of 1234, not a glTF wrap mode: the validator only warns \
-     (VALUE_NOT_IN_LIST), and the loader will not guess a wrap mode",
-)];
+const GENERATED_VALID_BUT_REFUSED: &[(&str, &str)] = &[
+    (
+        "gltf_textures__bad_texture_data_is_refused_by_name-5",
+        "a sampler's wrapS of 1234, not a glTF wrap mode: the validator only warns \
+         (VALUE_NOT_IN_LIST), and the loader will not guess a wrap mode",
+    ),
+    (
+        "gltf_alpha_mask_refusals__bad_cutoffs_masked_emitters_and_masked_glass_are_refused_by_name-2",
+        "an alphaCutoff of 1e300, finite for the validator's doubles, is infinite in f32",
+    ),
+    (
+        "gltf_alpha_mask_refusals__bad_cutoffs_masked_emitters_and_masked_glass_are_refused_by_name-6",
+        "refracting glass (a KHR_materials_volume thickness) with MASK holes: a refracting \
+         mesh must be closed to have an inside",
+    ),
+];
 
 /// Generated documents the validator calls invalid and the loader accepts.
 const GENERATED_INVALID_BUT_ACCEPTED: &[(&str, &str)] = &[];
