@@ -7,7 +7,9 @@
 #    the full sweep is `scripts/seed-sweep.sh 32`);
 # 2b. the Khronos glTF-Validator over every glTF and GLB file in the
 #    repository (scripts/ci-gltf-validator.sh; installs nodejs and npm), and
-#    the loader checked against its verdicts (tests/library/gltf_validator.rs);
+#    the loader checked against its verdicts (tests/library/gltf_validator.rs),
+#    then the same over the glTF documents the tests write at run time
+#    (scripts/ci-gltf-validator-generated.sh);
 # 3. the packaged crates built as a user gets them (cargo package), so that
 #    a file the code embeds cannot be left out of the package;
 # 4. the downstream renderer (a library user with default features off), the
@@ -27,7 +29,8 @@ bash scripts/ci-pinned-isa.sh
 bash scripts/seed-sweep.sh "${SEED_SWEEP_N:-4}"
 bash scripts/ci-gltf-validator.sh --out target/gltf-validator.jsonl
 ADAPTIVE_PM_GLTF_VALIDATOR_REPORT=target/gltf-validator.jsonl \
-    cargo test --locked --test library gltf_validator -- --ignored
+    cargo test --locked --test library gltf_validator::the_loader_follows -- --ignored
+bash scripts/ci-gltf-validator-generated.sh
 cargo package --workspace --exclude adaptive-pm-downstream --locked --allow-dirty
 bash scripts/ci-downstream.sh
 if [ "$(id -u)" -eq 0 ]; then

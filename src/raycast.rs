@@ -14,7 +14,9 @@
 //! - `Hit::ng` is the unit geometric normal, on either side (surfaces are
 //!   two-sided: the engine flips it towards the incoming photon);
 //! - `Hit::t` is in units of `Ray::dir`, within `[tnear, tfar]`;
-//! - a ray that is not finite misses (and is not occluded).
+//! - a ray that is not finite misses (and is not occluded);
+//! - with [`RayCaster::cuts_alpha_masks`], a point of an alpha mask's hole
+//!   ([`Scene::is_hole`]) is never hit nor occludes: rays pass through it.
 //!
 //! A hit that breaks the contract (an index the scene does not have, a `t`
 //! that is NaN or outside the segment, a normal that is not finite and
@@ -217,6 +219,18 @@ pub trait RayCaster: Send + Sync {
         Ok(())
     }
 
+    /// Whether this caster cuts the holes of the scene's alpha masks
+    /// (glTF `alphaMode: MASK`, [`crate::scene::AlphaMask`]): a candidate
+    /// hit for which [`Scene::is_hole`] is true is skipped, by
+    /// [`intersect`](Self::intersect) (which goes on to what lies behind)
+    /// and by [`occluded`](Self::occluded) alike. Embree's scene does
+    /// (`crate::embree::HitFilter`). The default, `false`, makes
+    /// [`crate::scene::PreparedScene::new`] refuse a scene with holes rather
+    /// than trace its cut-outs as walls.
+    fn cuts_alpha_masks(&self) -> bool {
+        false
+    }
+
     /// The compiled kernels this caster's hits come from, when they depend
     /// on the CPU (Embree's do): photon files record them, and shards traced
     /// with different ones are not merged. The default, `None`, says the
@@ -248,6 +262,9 @@ macro_rules! forward_caster {
             }
             fn kernels(&self) -> Option<crate::isa::Kernels> {
                 (**self).kernels()
+            }
+            fn cuts_alpha_masks(&self) -> bool {
+                (**self).cuts_alpha_masks()
             }
         }
     )*};

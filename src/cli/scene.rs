@@ -94,6 +94,24 @@ fn textures_note(scene: &Scene, material: usize) -> String {
     )
 }
 
+/// A material's alpha mask, for the listing (empty when it has none).
+fn mask_note(scene: &Scene, material: usize) -> String {
+    let Some(mask) = scene.alpha_mask(material) else {
+        return String::new();
+    };
+    let texture = match &mask.texture {
+        Some(r) => format!(
+            " x texture {}'s alpha (TEXCOORD_{})",
+            r.texture, r.tex_coord
+        ),
+        None => String::new(),
+    };
+    format!(
+        "  alpha mask: cutoff {} on factor {}{texture}",
+        mask.cutoff, mask.factor
+    )
+}
+
 pub fn run(args: SceneArgs) -> anyhow::Result<()> {
     let scene = Scene::open_with(&args.scene, &args.assets.options())?;
     let (lo, hi) = scene.bounds();
@@ -110,6 +128,8 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
                 "cosn": match l { Light::Area(a) => Some(a.emission.profile.exponent()), _ => None },
                 "two_sided": match l { Light::Area(a) => Some(a.emission.two_sided), _ => None },
                 "mesh": match l { Light::Area(a) => Some(scene.meshes()[a.mesh].name.clone()), _ => None },
+                "emissive_texture_pieces": match l { Light::Area(a) if a.is_textured() => Some(a.piece_count()), _ => None },
+                "power_exact": match l { Light::Area(a) => Some(a.power_is_exact()), _ => None },
                 "position": l.position().map(|p| [p.x, p.y, p.z]),
                 "direction": direction_of(l).map(|d| [d.x, d.y, d.z]),
                 "irradiance": match l { Light::Directional(d) => Some(d.irradiance().to_array()), _ => None },
@@ -122,7 +142,8 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             "scene": args.scene,
             "triangles": scene.triangle_count(),
             "meshes": scene.meshes().len(),
-            "materials": scene.materials().iter().map(|m| json!({"name": m.name, "brdf": brdf_name(&m.brdf), "emissive": m.emission.is_some()})).collect::<Vec<_>>(),
+            "materials": scene.materials().iter().enumerate().map(|(i, m)| json!({"name": m.name, "brdf": brdf_name(&m.brdf), "emissive": m.emission.is_some(),
+                "alpha_cutoff": scene.alpha_mask(i).map(|a| a.cutoff)})).collect::<Vec<_>>(),
             "lights": lights,
             "bounds": {"min": [lo.x, lo.y, lo.z], "max": [hi.x, hi.y, hi.z]},
             "camera": scene.camera().map(|c| json!({"eye": [c.eye.x, c.eye.y, c.eye.z], "forward": [c.forward.x, c.forward.y, c.forward.z], "vfov_deg": c.vfov_deg})),
@@ -156,7 +177,7 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
     println!("materials  {}", scene.materials().len());
     for (i, m) in scene.materials().iter().enumerate() {
         println!(
-            "  {:<16} {}{}{}",
+            "  {:<16} {}{}{}{}",
             m.name,
             brdf_name(&m.brdf),
             if m.emission.is_some() {
@@ -164,7 +185,8 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             } else {
                 ""
             },
-            textures_note(&scene, i)
+            textures_note(&scene, i),
+            mask_note(&scene, i)
         );
     }
     println!("lights     {}", scene.lights().len());

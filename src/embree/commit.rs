@@ -1,10 +1,11 @@
 //! Embree as the engine's [`RayCaster`], and [`Scene::commit`]: a scene and
 //! its Embree geometry, owned together.
 
-use super::{CommittedScene, Device};
+use super::{CommittedScene, Device, HitFilter};
 use crate::error::{Error, Result};
 use crate::raycast::{Hit, Ray, RayCaster};
 use crate::scene::{PreparedScene, Scene};
+use std::sync::Arc;
 
 /// A scene prepared for tracing with Embree.
 pub type EmbreeScene = PreparedScene<CommittedScene>;
@@ -34,6 +35,11 @@ impl RayCaster for CommittedScene {
         CommittedScene::kernels(self)
     }
 
+    /// Holes are cut by the geometries' hit filters ([`Scene::embree_geometry`]).
+    fn cuts_alpha_masks(&self) -> bool {
+        true
+    }
+
     /// One Embree geometry per mesh, in order, each with its mesh's material.
     fn check_scene(&self, scene: &Scene) -> Result<()> {
         if self.geometry_count() != scene.meshes.len() {
@@ -55,6 +61,17 @@ impl RayCaster for CommittedScene {
                 )));
             }
         }
+        // Geometries with holes were added with a filter, the others without.
+        let holed = (0..scene.meshes.len())
+            .filter(|&m| scene.mesh_has_holes(m))
+            .count();
+        if holed != self.filtered_count() {
+            return Err(Error::InvalidScene(format!(
+                "the scene has {holed} meshes with alpha-mask holes but the Embree scene has \
+                 {} filtered geometries: it was built from another scene",
+                self.filtered_count()
+            )));
+        }
         Ok(())
     }
 }
@@ -64,7 +81,9 @@ impl Scene {
     /// Hands the geometry to Embree and keeps the scene with it: the result
     /// is `'static`, `Send + Sync`, and what a [`crate::engine::Tracer`]
     /// traces. A hit's `material` is the mesh's material index and its
-    /// `geom_id` the mesh index.
+    /// `geom_id` the mesh index. A mesh whose alpha mask cuts holes gets a
+    /// hit filter ([`Scene::cutout`], [`super::HitFilter`]): every ray
+    /// passes through its holes.
     ///
     /// # Errors
     /// [`Error::Embree`] when Embree rejects the geometry; what
@@ -82,8 +101,16 @@ impl Scene {
     /// [`Error::Embree`] when Embree rejects the geometry.
     pub fn embree_geometry(&self, device: &Device) -> Result<CommittedScene> {
         let mut builder = device.scene_builder()?;
-        for m in &self.meshes {
-            builder.add_triangles(&m.positions, &m.indices, m.material as u32)?;
+        for (i, m) in self.meshes.iter().enumerate() {
+            let material = m.material as u32;
+            match self.cutout(i) {
+                // Only meshes whose mask cuts holes pay for a filter.
+                Some(cutout) => {
+                    let filter: HitFilter = Arc::new(move |prim, u, v| !cutout.is_hole(prim, u, v));
+                    builder.add_triangles_with_filter(&m.positions, &m.indices, material, filter)?
+                }
+                None => builder.add_triangles(&m.positions, &m.indices, material)?,
+            };
         }
         builder.commit()
     }

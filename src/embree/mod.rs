@@ -16,6 +16,11 @@
 //! - Batches: [`CommittedScene::intersect_batch`] uses packets as wide as
 //!   the device's kernel set ([`BatchKernel::native_for`]); every
 //!   kernel is measured in `benches/rays.rs`.
+//! - [`HitFilter`] ([`SceneBuilder::add_triangles_with_filter`]): a safe
+//!   predicate Embree's intersection and occlusion filters ask about every
+//!   candidate hit on a geometry; rejected points are holes that every ray
+//!   passes through (glTF `alphaMode: MASK`, built by
+//!   [`crate::scene::Scene::cutout`]). Only filtered geometries pay for it.
 //! - [`set_flush_denormals`] / [`thread_pool`]: Embree's traversal expects
 //!   flush-to-zero and denormals-are-zero on every tracing thread.
 //! - `throughput` (with the `cli` feature, hidden): the measurement behind
@@ -23,6 +28,7 @@
 
 mod commit;
 mod device;
+mod filter;
 mod packet;
 mod scene;
 mod threads;
@@ -33,6 +39,7 @@ pub mod throughput;
 
 pub use commit::EmbreeScene;
 pub use device::Device;
+pub use filter::HitFilter;
 pub use packet::{default_batch_kernel, BatchKernel};
 pub use scene::{CommittedScene, SceneBuilder, EMBREE_LARGE};
 pub use threads::{

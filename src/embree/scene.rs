@@ -23,6 +23,7 @@ use embree_sys as sys;
 use glam::Vec3;
 
 use super::device::{Device, DeviceInner};
+use super::filter::{self, FilterBox, HitFilter};
 use super::packet::BatchKernel;
 use super::{Hit, Ray};
 use crate::{Error, Result};
@@ -54,9 +55,13 @@ impl Drop for GeometryHandle {
 /// A scene under construction. Add meshes, then [`commit`](Self::commit).
 pub struct SceneBuilder<'d> {
     device: &'d Device,
+    // Field order matters: the scene (and the geometries it holds) is
+    // released before the filters they point at.
     scene: SceneHandle,
     /// Material of each geometry, indexed by Embree geometry ID.
     materials: Vec<u32>,
+    /// The hit filters of the filtered geometries ([`super::HitFilter`]).
+    filters: Vec<FilterBox>,
 }
 
 impl std::fmt::Debug for SceneBuilder<'_> {
@@ -98,6 +103,7 @@ impl<'d> SceneBuilder<'d> {
             device,
             scene,
             materials: Vec::new(),
+            filters: Vec::new(),
         })
     }
 
@@ -114,6 +120,36 @@ impl<'d> SceneBuilder<'d> {
         positions: &[Vec3],
         indices: &[[u32; 3]],
         material: u32,
+    ) -> Result<u32> {
+        self.add_geometry(positions, indices, material, None)
+    }
+
+    /// [`add_triangles`](Self::add_triangles) with a hit filter: every
+    /// candidate hit on the mesh, for closest hits and occlusion, single
+    /// rays and packets, counts only when `filter(prim_id, u, v)` is true
+    /// (`prim_id` indexes `indices`, `u` and `v` are the barycentrics of
+    /// its vertices 1 and 2); elsewhere rays pass through. See
+    /// [`super::HitFilter`].
+    ///
+    /// # Errors
+    /// As [`add_triangles`](Self::add_triangles); [`Error::Embree`] when
+    /// this Embree was built without filter functions.
+    pub fn add_triangles_with_filter(
+        &mut self,
+        positions: &[Vec3],
+        indices: &[[u32; 3]],
+        material: u32,
+        filter: HitFilter,
+    ) -> Result<u32> {
+        self.add_geometry(positions, indices, material, Some(filter))
+    }
+
+    fn add_geometry(
+        &mut self,
+        positions: &[Vec3],
+        indices: &[[u32; 3]],
+        material: u32,
+        filter: Option<HitFilter>,
     ) -> Result<u32> {
         if indices.is_empty() {
             return Err(Error::InvalidScene("a mesh has no triangles".into()));
@@ -147,11 +183,28 @@ impl<'d> SceneBuilder<'d> {
 
         let inner: &DeviceInner = &self.device.inner;
         let _guard = inner.lock();
+        if filter.is_some() && !filter::supported(inner.raw()) {
+            return Err(Error::Embree {
+                code: 0,
+                message: "this Embree was built without filter functions \
+                          (EMBREE_FILTER_FUNCTION=OFF): a hit filter (alphaMode MASK) needs them"
+                    .into(),
+            });
+        }
         // SAFETY: the device is live; the handle is checked for null.
         let raw = unsafe { sys::rtcNewGeometry(inner.raw(), sys::RTC_GEOMETRY_TYPE_TRIANGLE) };
         let geometry =
             GeometryHandle(NonNull::new(raw).ok_or_else(|| inner.null_error("rtcNewGeometry"))?);
         let g = geometry.0.as_ptr();
+        // The filter goes to `self.filters` before Embree sees it: whatever
+        // fails below, it lives as long as the scene that may hold the
+        // geometry (field order), and a box's contents never move.
+        let filter: Option<*const HitFilter> = filter.map(|f| {
+            let b: FilterBox = Box::new(f);
+            let at: *const HitFilter = &*b;
+            self.filters.push(b);
+            at
+        });
         // SAFETY: `g` is a live geometry only this thread sees. Embree allocates
         // each buffer for exactly `count` items of `stride` bytes (plus its own
         // padding) and returns null on failure, checked before the copy; the
@@ -191,6 +244,11 @@ impl<'d> SceneBuilder<'d> {
                 12 * indices.len(),
             );
             sys::rtcSetGeometryBuildQuality(g, sys::RTC_BUILD_QUALITY_HIGH);
+            if let Some(f) = filter {
+                // `f` is owned by `self.filters`, which outlives the scene
+                // holding the geometry (see above and `install`).
+                filter::install(g, f);
+            }
             sys::rtcCommitGeometry(g);
         }
         inner.check()?;
@@ -217,6 +275,7 @@ impl<'d> SceneBuilder<'d> {
             device,
             scene,
             materials,
+            filters,
         } = self;
         let inner = Arc::clone(&device.inner);
         let bounds = {
@@ -239,6 +298,7 @@ impl<'d> SceneBuilder<'d> {
             materials,
             bounds,
             device: inner,
+            filters,
         })
     }
 }
@@ -246,17 +306,20 @@ impl<'d> SceneBuilder<'d> {
 /// A built, immutable scene. Ray queries take `&self` and may run on any
 /// number of threads at once.
 pub struct CommittedScene {
-    // Field order matters: the scene is released before the device reference.
+    // Field order matters: the scene is released before the device reference
+    // and before the hit filters its geometries point at.
     scene: SceneHandle,
     materials: Vec<u32>,
     bounds: (Vec3, Vec3),
     device: Arc<DeviceInner>,
+    filters: Vec<FilterBox>,
 }
 
 // SAFETY: a committed scene is never modified again (no `&mut` methods touch
 // Embree); Embree allows `rtcIntersect*` / `rtcOccluded*` on a committed
 // scene from any threads concurrently, and its reference counts (released in
-// `Drop`, on whatever thread) are atomic.
+// `Drop`, on whatever thread) are atomic. The hit filters Embree calls from
+// those threads are `Send + Sync` ([`HitFilter`]).
 unsafe impl Send for CommittedScene {}
 // SAFETY: see `Send`: shared access only runs the concurrent-safe queries.
 unsafe impl Sync for CommittedScene {}
@@ -265,6 +328,7 @@ impl std::fmt::Debug for CommittedScene {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("CommittedScene")
             .field("geometries", &self.materials.len())
+            .field("filtered", &self.filters.len())
             .field("bounds", &self.bounds)
             .finish_non_exhaustive()
     }
@@ -327,6 +391,12 @@ impl CommittedScene {
     /// Number of geometry IDs in use (meshes added).
     pub fn geometry_count(&self) -> usize {
         self.materials.len()
+    }
+
+    /// Number of geometries with a hit filter
+    /// ([`SceneBuilder::add_triangles_with_filter`]).
+    pub fn filtered_count(&self) -> usize {
+        self.filters.len()
     }
 
     /// The material passed to [`SceneBuilder::add_triangles`] for `geom_id`.

@@ -169,20 +169,21 @@ impl DensityControl {
             // r_t = cell / 2 around the photon.
             let f = (rec.position - self.origin) * self.inv_cell - Vec3::splat(0.5);
             let c = [f.x, f.y, f.z].map(|v| (v.floor() as i64).clamp(0, (1 << 20) - 2));
-            for dz in 0..=1 {
-                for dy in 0..=1 {
-                    for dx in 0..=1 {
-                        let key = Self::key([c[0] + dx, c[1] + dy, c[2] + dz]);
-                        let s = self.slot(key);
-                        if self.keys[s] != key {
-                            continue;
-                        }
-                        for e in &self.cells[self.slots[s] as usize] {
-                            let d2 = (e.position - rec.position).length_squared();
-                            if d2 <= self.radius2 && e.direction.dot(n) < 0.0 {
-                                self.candidates.push((d2, e.index, e.depth, e.caustic));
-                            }
-                        }
+            // All eight probes first, then the scans: the probes' loads do
+            // not depend on one another, so they overlap, where probing and
+            // scanning cell by cell waited on each cell's misses in turn
+            // (three quarters of a density-mode trace).
+            let cells: [Option<u32>; 8] = std::array::from_fn(|i| {
+                let d = [i & 1, (i >> 1) & 1, i >> 2].map(|b| b as i64);
+                let key = Self::key([c[0] + d[0], c[1] + d[1], c[2] + d[2]]);
+                let s = self.slot(key);
+                (self.keys[s] == key).then_some(self.slots[s])
+            });
+            for cell in cells.into_iter().flatten() {
+                for e in &self.cells[cell as usize] {
+                    let d2 = (e.position - rec.position).length_squared();
+                    if d2 <= self.radius2 && e.direction.dot(n) < 0.0 {
+                        self.candidates.push((d2, e.index, e.depth, e.caustic));
                     }
                 }
             }

@@ -16,13 +16,18 @@
 //!   probability (the estimate is unbiased whatever the weights).
 //!
 //! Area light of radiance `L0 cos^n(theta_l)` (one-sided, about the
-//! triangle's geometric normal); point light `I cos(theta_x) / r^2`; spot
+//! triangle's geometric normal; `L0` the texel's on a textured light, whose
+//! points are drawn by emitted power, [`crate::scene::AreaLight::sample_point`]:
+//! the pair's first coordinate picks the piece, a second pair
+//! ([`super::sampler::dim::LIGHT_POINT`]) the point in it; divided by that
+//! pdf); point light `I cos(theta_x) / r^2`; spot
 //! light the same times its falloff; directional light `E cos(theta_x)`,
 //! its shadow ray unbounded towards the light. Point, spot and directional
 //! lights are deltas: no BRDF sample finds them, so nothing else counts them.
 
 use crate::brdf::Brdf;
 use crate::raycast::{Ray, RayCaster};
+use crate::rng::hash2;
 use crate::sampling::{luminance, uniform_triangle, Frame};
 use crate::scene::{Light, PreparedScene, Scene};
 use glam::Vec3;
@@ -127,7 +132,7 @@ impl<'a> LightSampler<'a> {
             Light::Area(a) => {
                 let (wi, r2, cos_x) = toward_centre();
                 let cos_l = a.emission.facing((-wi).dot(t.normal)).max(0.05);
-                let le = luminance(a.emission.radiance) * a.emission.profile_toward(cos_l);
+                let le = luminance(a.mean_radiance()) * a.emission.profile_toward(cos_l);
                 le * cos_l * cos_x * a.area / r2.max(a.area)
             }
             Light::Point(p) => {
@@ -170,8 +175,27 @@ impl<'a> LightSampler<'a> {
     /// Where light `i` lights `x` from, by `u`, and what arrives: a point
     /// and `L G / pdf_area` (area lights), or what [`punctual_arrival`]
     /// gives, before the BRDF, `cos(theta_x)` and visibility.
-    fn sample_light(&self, i: usize, x: Vec3, u: [f32; 2]) -> Option<(Source, Vec3)> {
+    fn sample_light(
+        &self,
+        i: usize,
+        x: Vec3,
+        u: [f32; 2],
+        u_point: impl FnOnce() -> [f32; 2],
+    ) -> Option<(Source, Vec3)> {
         match &self.scene.lights[i] {
+            Light::Area(a) if a.is_textured() => {
+                // By emitted power: `u[0]` picks the piece, `u_point` the
+                // point in it; the point's texel over its area pdf.
+                let p = a.sample_point(u[0], u_point());
+                let d = x - p.position;
+                let r2 = d.length_squared();
+                let cos_l = a.emission.facing(p.normal.dot(d) / r2.sqrt());
+                if !(r2 > 0.0 && cos_l > 0.0 && p.pdf_area > 0.0) {
+                    return None;
+                }
+                let le = p.radiance * a.emission.profile_toward(cos_l);
+                Some((Source::At(p.position), le * cos_l / (p.pdf_area * r2)))
+            }
             Light::Area(a) => {
                 let t = &self.tables[i];
                 let k = t.cdf.partition_point(|&c| c <= u[0]).min(t.cdf.len() - 1);
@@ -201,11 +225,32 @@ impl<'a> LightSampler<'a> {
     /// (world, unit) on the side of the unit geometric normal `ng`, shaded
     /// with the unit normal `n`: a light picked by contribution, a point on
     /// it from `u`, a shadow ray from `x + eps ng`.
-    pub fn sample(&self, brdf: &Brdf, [x, ng, n, wo]: [Vec3; 4], eps: f32, u: [f32; 2]) -> Vec3 {
+    ///
+    /// On a textured light the point inside the piece `u` picks comes from
+    /// a hash of `u` ([`Self::sample_with`] takes a stratified one).
+    pub fn sample(&self, brdf: &Brdf, pts: [Vec3; 4], eps: f32, u: [f32; 2]) -> Vec3 {
+        let hashed = || {
+            let h = hash2(u64::from(u[0].to_bits()), u64::from(u[1].to_bits()));
+            let unit = |b: u64| (b >> 40) as f32 * (1.0 / 16_777_216.0);
+            [unit(h), unit(h << 24)]
+        };
+        self.sample_with(brdf, pts, eps, u, hashed)
+    }
+
+    /// [`Self::sample`] with `u_point`, called only for a textured light,
+    /// placing the point inside the piece of the light that `u` picks.
+    pub fn sample_with(
+        &self,
+        brdf: &Brdf,
+        [x, ng, n, wo]: [Vec3; 4],
+        eps: f32,
+        u: [f32; 2],
+        u_point: impl FnOnce() -> [f32; 2],
+    ) -> Vec3 {
         let Some((i, prob, u0)) = self.pick(x, n, u[0]) else {
             return Vec3::ZERO;
         };
-        let Some((source, le_g)) = self.sample_light(i, x, [u0, u[1]]) else {
+        let Some((source, le_g)) = self.sample_light(i, x, [u0, u[1]], u_point) else {
             return Vec3::ZERO;
         };
         let wi = source.direction_from(x);

@@ -93,9 +93,10 @@ struct SurfaceHit {
 }
 
 impl<'a> Ctx<'a> {
-    fn emitted(material: &Material, h: &Hit, wo: Vec3) -> Vec3 {
+    /// Emission at `h` towards `wo` (its texel's, for an emissive texture).
+    fn emitted(&self, material: &Material, h: &Hit, wo: Vec3) -> Vec3 {
         match material.emission {
-            Some(e) => e.radiance_at(h.ng.dot(wo)),
+            Some(_) => self.scene.emitted_radiance(h, wo),
             None => Vec3::ZERO,
         }
     }
@@ -127,7 +128,7 @@ impl<'a> Ctx<'a> {
             }
             let normal = h.facing(dir);
             if bounce >= first_emission {
-                *emitted += throughput * Self::emitted(material, &h, wo);
+                *emitted += throughput * self.emitted(material, &h, wo);
             }
             if !material.brdf.is_specular() {
                 return Some(SurfaceHit {
@@ -259,12 +260,13 @@ impl<'a> Ctx<'a> {
         let l = self.light_samples;
         let mut sum = Vec3::ZERO;
         for j in 0..l {
-            let u = px.get_2d(dim::LIGHT, sample * l + j, self.spp * l);
-            sum += self.lights.sample(
+            let (i, n) = (sample * l + j, self.spp * l);
+            sum += self.lights.sample_with(
                 &s.brdf,
                 [s.position, s.normal, s.shading, s.wo],
                 self.eps,
-                u,
+                px.get_2d(dim::LIGHT, i, n),
+                || px.get_2d(dim::LIGHT_POINT, i, n),
             );
         }
         sum / l as f32

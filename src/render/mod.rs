@@ -28,9 +28,11 @@
 //! one sampled direction each: reflection or refraction by Fresnel) to its
 //! first non-specular hit `x`, as pbrt-v4's SPPM places its visible point.
 //! The pixel's radiance is (Jensen's decomposition)
-//! - the emission of an emitter the (possibly mirrored) ray reaches, `L0 cos^n`;
+//! - the emission of an emitter the (possibly mirrored) ray reaches, `L0 cos^n`
+//!   (`L0` the texel's there, for an emissive texture);
 //! - **direct light** at `x`: one sample per light and pixel sample (area
-//!   lights: an area-uniform point, the `cos^n` radiance, a shadow ray;
+//!   lights: an area-uniform point, or on a textured light one drawn by
+//!   emitted power, the `cos^n` radiance over the point's pdf, a shadow ray;
 //!   point and spot lights: their intensity over `r^2` and a shadow ray;
 //!   directional lights: their irradiance and a shadow ray unbounded
 //!   towards them);

@@ -4,7 +4,8 @@
 //! # Estimator
 //! From the camera, a path is followed surface to surface:
 //! - at every non-delta vertex, **next-event estimation**: one sample of
-//!   every light (area lights: an area-uniform point and a shadow ray; point
+//!   every light (area lights: an area-uniform point, or by emitted power
+//!   on a light with an emissive texture, and a shadow ray; point
 //!   and spot lights: their intensity over `r^2`; directional lights: their
 //!   irradiance `E`, the shadow ray unbounded towards them). Point, spot and
 //!   directional lights are deltas that no BRDF sample can hit, so their
@@ -13,7 +14,8 @@
 //!   reaches adds its emission. Area-light emission is counted by both
 //!   strategies, so both are weighted by **multiple importance sampling**
 //!   (power heuristic, one sample of each: `w = p^2 / (p_light^2 + p_brdf^2)`,
-//!   the light's pdf in solid angle `r^2 / (cos_l A)`); after a mirror, or
+//!   the light's pdf in solid angle `r^2 / (cos_l A)`, `r^2 p_A(y) / cos_l`
+//!   on a textured light whose area pdf at `y` is `p_A(y)`); after a mirror, or
 //!   from the camera, the emission counts fully (light sampling cannot find it);
 //! - **Russian roulette** from the [`RR_START`]-th non-delta vertex on:
 //!   survival `q = min(max(throughput), 0.95)`, the survivor divided by `q`.
@@ -41,7 +43,7 @@ use super::path_light::{area_light_pdf, next_event};
 use super::ray_epsilon;
 use crate::brdf::Transport;
 use crate::error::{Error, Result};
-use crate::raycast::{Ray, RayCaster};
+use crate::raycast::{Hit, Ray, RayCaster};
 use crate::rng::Rng;
 use crate::sampling::Frame;
 use crate::scene::{consistent_with_geometry, Light, PreparedScene, Scene};
@@ -217,8 +219,8 @@ impl<'a> PathTracer<'a> {
                     _ => Class::Indirect,
                 };
                 if cos_l > 0.0 && part.counts(class, show_emitters) {
-                    let le = e.radiance_toward(cos_l);
-                    let w = match (prev, self.light_area(h.geom_id)) {
+                    let le = e.radiance_toward(cos_l) * self.scene.emission_texel(&h);
+                    let w = match (prev, self.light_area(&h)) {
                         (Some((p, pdf_b)), Some(area)) => {
                             let pdf_l = area_light_pdf(p, pos, cos_l, area);
                             power_heuristic(pdf_b, pdf_l)
@@ -297,10 +299,17 @@ impl<'a> PathTracer<'a> {
         l
     }
 
-    /// The area of the area light made of mesh `geom`, if it is one.
-    fn light_area(&self, geom: u32) -> Option<f32> {
-        let i = (*self.light_of_mesh.get(geom as usize)?)?;
-        self.scene.lights.get(i).and_then(Light::area)
+    /// The area light sampling's "area" at hit `h` on an area light: the
+    /// light's area when it is sampled uniformly, the reciprocal of its
+    /// area pdf at the point when textured (sampled by power).
+    fn light_area(&self, h: &Hit) -> Option<f32> {
+        let i = (*self.light_of_mesh.get(h.geom_id as usize)?)?;
+        match self.scene.lights.get(i)? {
+            Light::Area(a) if a.is_textured() => {
+                Some(1.0 / a.pdf_area_at(h.prim_id as usize, h.u, h.v))
+            }
+            l => l.area(),
+        }
     }
 }
 

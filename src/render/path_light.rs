@@ -14,8 +14,10 @@ use crate::sampling::Frame;
 use crate::scene::Light;
 use glam::Vec3;
 
-/// Solid-angle pdf, seen from `from`, of an area-uniform sample at `at` on a
-/// light of total area `area` whose cosine towards `from` is `cos_l`.
+/// Solid-angle pdf, seen from `from`, of a sample at `at` on an area light
+/// whose cosine towards `from` is `cos_l`, drawn with the area pdf `1 / area`
+/// (`area`: the light's area when it is sampled uniformly, else the
+/// reciprocal of the point's area pdf).
 pub(super) fn area_light_pdf(from: Vec3, at: Vec3, cos_l: f32, area: f32) -> f32 {
     let d2 = (at - from).length_squared();
     if cos_l > 0.0 && area > 0.0 {
@@ -44,20 +46,25 @@ pub(super) fn next_event(
         // over the pdf, MIS weight input)
         let (source, li, pdf_l) = match light {
             Light::Area(a) => {
-                let e = a.sample(rng.next_f32(), rng.next_2d(), [0.5, 0.5]);
-                let Some(n_l) = e.normal else { continue };
-                let d = x - e.origin;
+                // By emitted power on a textured light, else area-uniform.
+                let p = a.sample_point(rng.next_f32(), rng.next_2d());
+                let d = x - p.position;
                 let r2 = d.length_squared();
                 if !(r2 > 0.0) {
                     continue;
                 }
-                let cos_l = a.emission.facing(n_l.dot(d) / r2.sqrt());
+                let cos_l = a.emission.facing(p.normal.dot(d) / r2.sqrt());
                 if cos_l <= 0.0 {
                     continue;
                 }
-                let le = a.emission.radiance_toward(cos_l);
-                let pdf = area_light_pdf(x, e.origin, cos_l, a.area);
-                (Source::At(e.origin), le / pdf, Some(pdf))
+                let le = p.radiance * a.emission.profile_toward(cos_l);
+                let area = if a.is_textured() {
+                    1.0 / p.pdf_area
+                } else {
+                    a.area
+                };
+                let pdf = area_light_pdf(x, p.position, cos_l, area);
+                (Source::At(p.position), le / pdf, Some(pdf))
             }
             delta => match punctual_arrival(delta, x) {
                 Some((source, li)) => (source, li, None),

@@ -6,7 +6,9 @@
 //! `E(x) = integral L0 cos^n(theta_l) cos(theta_l) cos(theta_x) / r^2 V dA`.
 //! Point light of intensity `I`: `I cos(theta_x) / r^2 V`; spot light: the same
 //! times its falloff (the smoothstep of [`crate::scene::SpotLight`]);
-//! directional light of irradiance `E`: `E cos(theta_x) V`.
+//! directional light of irradiance `E`: `E cos(theta_x) V`. A textured
+//! area light's `L0` is its texel's at each node (the rule then converges
+//! as the grid refines, not exactly).
 
 use super::direct::{punctual_arrival, Source};
 use crate::raycast::RayCaster;
@@ -74,7 +76,11 @@ fn quadrature(scene: &Scene, rt: Option<&dyn RayCaster>, x: Vec3, n: Vec3, grid:
                                     continue;
                                 }
                                 let le = a.emission.profile_toward(cos_l);
-                                e += a.emission.radiance * (le * cos_l * cos_x * da / r2);
+                                let l0 = match a.is_textured() {
+                                    true => a.radiance_at(t, b1, b2),
+                                    false => a.emission.radiance,
+                                };
+                                e += l0 * (le * cos_l * cos_x * da / r2);
                             }
                         }
                     }

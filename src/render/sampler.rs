@@ -25,11 +25,15 @@ pub mod dim {
     pub const LIGHT: u32 = 1;
     /// The final-gather directions at the first hit.
     pub const GATHER: u32 = 2;
+    /// The point inside the piece a light sample on a textured light picked
+    /// (the piece takes [`LIGHT`]'s first coordinate, whose bits left over
+    /// would place the point on a lattice of a few positions).
+    pub const LIGHT_POINT: u32 = 3;
 }
 
 /// Pairs whose hashes a sampler computes once, not per point: the
-/// renderer's three ([`dim`]).
-const CACHED_PAIRS: usize = 3;
+/// renderer's four ([`dim`]).
+const CACHED_PAIRS: usize = 4;
 
 /// The stratified points of one pixel.
 #[derive(Clone, Copy, Debug)]

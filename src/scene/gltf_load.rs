@@ -25,8 +25,17 @@
 //!   absorption); a value outside its range, partial transmission and
 //!   transmission on a metal are refused, naming the material.
 //! - Base colour and metallic-roughness textures multiply their factors
-//!   ([`super::gltf_textures`], [`super::textured`]); emissive and normal
-//!   textures and `alphaMode` are named in [`Scene::warnings`], not modelled.
+//!   ([`super::gltf_textures`], [`super::textured`]); so does an
+//!   `emissiveTexture` the emission, making an area light whose radiance
+//!   varies over its surface, sampled by emitted power
+//!   ([`super::gltf_emissive`], [`super::emissive`]); a `normalTexture`
+//!   bends the shading normal ([`super::normal_map`]).
+//! - `alphaMode: MASK` cuts holes where `baseColorFactor.a *
+//!   baseColorTexture.a` is below `alphaCutoff` (default 0.5; a cut-off that
+//!   is not finite or is negative is refused), which every ray passes
+//!   through ([`super::alpha`]); a masked emitter with holes is refused.
+//!   `alphaMode: BLEND` is traced as OPAQUE, with a [`Scene::warnings`]
+//!   entry naming the material.
 //! - `NORMAL` gives smooth shading normals ([`Scene::set_vertex_normals`]).
 //! - `KHR_mesh_quantization`: POSITION, NORMAL and TEXCOORD_n may be 8- or
 //!   16-bit integers ([`super::gltf_quantized`]): normalized ones are
@@ -118,6 +127,10 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
         let id = scene.add_material(material);
         if let Some(maps) = textures.maps_of(&m, factors, specular, &mut scene)? {
             scene.set_material_maps(id, maps)?;
+        }
+        super::gltf_emissive::read_emissive(&m, id, &mut textures, &mut scene)?;
+        if let Some(mask) = textures.mask_of(&m, &mut scene)? {
+            scene.set_alpha_mask(id, mask)?;
         }
         material_ids.push(id);
     }

@@ -1,15 +1,19 @@
 //! A glTF material's textures: which are read ([`super::textured`]: base
 //! colour and metallic-roughness, on opaque materials; normal textures,
-//! [`super::normal_map`]), the images decoded
-//! once per texture, and the texture coordinates of the meshes that use
-//! them. What is not modelled is named in the scene's warnings instead of
-//! being dropped silently: emissive textures, `alphaMode` MASK and BLEND,
-//! and the textures of mirrors and glass.
+//! [`super::normal_map`]), its alpha mask ([`super::alpha`]: `alphaMode:
+//! MASK`, `alphaCutoff`, the alpha of `baseColorFactor` and
+//! `baseColorTexture`), the images decoded once per texture, and the texture
+//! coordinates of the meshes that use them (and of those an emissive texture
+//! reads: [`super::gltf_emissive`]). What is not modelled is named in the
+//! scene's warnings instead of being dropped silently: `alphaMode` BLEND
+//! (traced as OPAQUE), and the base colour and metallic-roughness textures
+//! of mirrors and glass.
 //!
 //! Images come from a `bufferView` (a GLB's usual form) or a `data:` URI.
 //! Image files (`uri: "wood.png"`, `../textures/wood.png`) are read like
 //! buffers: only inside the scene's asset root (see [`super::assets`]).
 
+use super::alpha::AlphaMask;
 use super::assets::AssetRoot;
 use super::gltf_images::{decode, MAX_TEXELS};
 use super::normal_map::NormalMap;
@@ -84,7 +88,8 @@ impl<'a> TextureLoader<'a> {
             true => {
                 scene.warnings.push(format!(
                     "{label}: its base colour and metallic-roughness textures are not read \
-                     (a mirror or glass scatters by its factors)"
+                     (a mirror or glass scatters by its factors; \
+                     only an alphaMode MASK reads the base colour texture's alpha)"
                 ));
                 (None, None)
             }
@@ -144,7 +149,33 @@ impl<'a> TextureLoader<'a> {
         })
     }
 
-    fn texture_ref(&mut self, info: &gltf::texture::Info, scene: &mut Scene) -> Result<TextureRef> {
+    /// The alpha mask of material `m` when it is `alphaMode: MASK`: its
+    /// `alphaCutoff` (default 0.5; checked by [`check_json`]), the alpha of
+    /// `baseColorFactor`, and `baseColorTexture` (loaded here if the colour
+    /// maps did not load it; a mirror's or glass's texture is read for its
+    /// alpha alone).
+    pub(super) fn mask_of(
+        &mut self,
+        m: &gltf::Material,
+        scene: &mut Scene,
+    ) -> Result<Option<AlphaMask>> {
+        if m.alpha_mode() != gltf::material::AlphaMode::Mask {
+            return Ok(None);
+        }
+        let pbr = m.pbr_metallic_roughness();
+        let cutoff = m.alpha_cutoff().unwrap_or(AlphaMask::DEFAULT_CUTOFF);
+        let mask = AlphaMask::new(cutoff, pbr.base_color_factor()[3]);
+        Ok(Some(match pbr.base_color_texture() {
+            Some(info) => mask.with_texture(self.texture_ref(&info, scene)?),
+            None => mask,
+        }))
+    }
+
+    pub(super) fn texture_ref(
+        &mut self,
+        info: &gltf::texture::Info,
+        scene: &mut Scene,
+    ) -> Result<TextureRef> {
         let index = self.scene_texture(&info.texture(), scene)?;
         let (transform, tex_coord) = match info.texture_transform() {
             Some(x) => (
@@ -194,7 +225,7 @@ impl<'a> TextureLoader<'a> {
     }
 }
 
-fn material_label(m: &gltf::Material) -> String {
+pub(super) fn material_label(m: &gltf::Material) -> String {
     match m.index() {
         Some(i) => super::gltf_checks::label("material", i, m.name()),
         None => "the default material".to_string(),
@@ -204,13 +235,10 @@ fn material_label(m: &gltf::Material) -> String {
 /// Warns of the parts of `m` the loader reads but does not model.
 fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
     let mut ignored = Vec::new();
-    if m.emissive_texture().is_some() {
-        ignored.push("its emissiveTexture (it emits its emissiveFactor everywhere)");
-    }
-    match m.alpha_mode() {
-        gltf::material::AlphaMode::Opaque => {}
-        gltf::material::AlphaMode::Mask => ignored.push("alphaMode MASK (it is opaque)"),
-        gltf::material::AlphaMode::Blend => ignored.push("alphaMode BLEND (it is opaque)"),
+    if m.alpha_mode() == gltf::material::AlphaMode::Blend {
+        // MASK is modelled (`TextureLoader::mask_of`); BLEND's partial
+        // coverage is not (docs/scenes.md).
+        ignored.push("alphaMode BLEND (it is traced as OPAQUE: alpha is ignored)");
     }
     for what in ignored {
         scene
@@ -229,12 +257,19 @@ pub(super) fn load_texcoords(
     label: &str,
 ) -> Result<()> {
     let material = scene.meshes[mesh].material;
-    let Some(maps) = scene.material_maps(material) else {
-        return Ok(());
-    };
-    let normal = maps.normal.map(|n| n.texture);
-    let mut sets: Vec<usize> = [maps.base_color, maps.metallic_roughness, normal]
+    let maps = scene.material_maps(material);
+    let refs = maps.map_or([None, None, None], |m| {
+        [
+            m.base_color,
+            m.metallic_roughness,
+            m.normal.map(|n| n.texture),
+        ]
+    });
+    let emissive = scene.emission_texture(material).copied();
+    let mask = scene.alpha_mask(material).and_then(|m| m.texture);
+    let mut sets: Vec<usize> = refs
         .iter()
+        .chain([&emissive, &mask])
         .flatten()
         .map(|r| r.tex_coord)
         .collect();
@@ -272,7 +307,14 @@ pub(super) fn load_tangents(
         return Ok(());
     };
     let Some(accessor) = prim.get(&gltf::mesh::Semantic::Tangents) else {
-        return scene.generate_tangents(mesh, map.texture.tex_coord);
+        // A valid file may have texture coordinates that give no tangent
+        // (all equal): it loads, shaded with its unbent normals.
+        if let Err(e) = scene.generate_tangents(mesh, map.texture.tex_coord) {
+            scene
+                .warnings
+                .push(format!("{e}; its normal texture is not applied"));
+        }
+        return Ok(());
     };
     let linear = glam::Mat3::from_mat4(*world);
     let sign = linear.determinant().signum();
@@ -298,6 +340,15 @@ pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
         let name = label("material", i, m.name.as_deref());
         if !matches!(m.alpha_mode, Checked::Valid(_)) {
             return bad(format!("{name} has an unknown alphaMode"));
+        }
+        // The schema's minimum; checked whatever the mode (a JSON number too
+        // large for an f32 reads as infinity).
+        if let Some(c) = m.alpha_cutoff.map(|c| c.0) {
+            if !(c.is_finite() && c >= 0.0) {
+                return bad(format!(
+                    "{name} has the alphaCutoff {c}: it must be a finite number >= 0"
+                ));
+            }
         }
         let pbr = &m.pbr_metallic_roughness;
         for info in [

@@ -13,12 +13,23 @@
 //!   `E pi r^2` through a disc of the scene's bounding radius `r`.
 //!
 //! Punctual lights have no area: the adaptive mode uses `alpha_A = 1` for them.
+//!
+//! An area light with an emissive texture ([`AreaLight::is_textured`],
+//! `scene::emission_map`) has a radiance `L0(x)` that varies over its
+//! surface: its power is `sides (2 pi / (n + 2)) integral L0 dA`, summed
+//! over the texels, and its points are sampled by emitted power, each
+//! photon weighted by its point's radiance over the pdf.
 
+use super::emission_map::EmissionMap;
 use super::{triangle_area, DirectionalLight, Emission, Mesh};
+
+mod points;
 use crate::emitter::CosN;
 use crate::sampling::{spherical_direction, uniform_triangle, Frame};
 use glam::Vec3;
+pub use points::LightPoint;
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// One photon leaving a light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,6 +63,8 @@ pub struct AreaLight {
     /// triangle is found in O(1) expected steps instead of a binary search
     /// (13 dependent, unpredictable branches for an 8k-triangle emitter).
     guide: Vec<u32>,
+    /// The emissive texture, when the radiance varies over the surface.
+    map: Option<Arc<EmissionMap>>,
 }
 
 impl AreaLight {
@@ -86,6 +99,7 @@ impl AreaLight {
             frames,
             cdf,
             guide,
+            map: None,
         })
     }
 
@@ -116,10 +130,18 @@ impl AreaLight {
         self.emission.profile = profile;
     }
 
-    /// Emitted power per channel.
+    /// Emitted power per channel: `sides (2 pi / (n + 2)) integral L0 dA`,
+    /// the texels' sum for a textured light ([`Self::power_is_exact`]).
+    ///
+    /// Used for: the share of photons each light emits (`engine::counts`:
+    /// `N_MAX P_l / sum P`, and the adaptive mode's `alpha_E`), each
+    /// photon's power (`power / N` times the sample's weight), the
+    /// renderer's light choice (its share by power), and the scene's checks
+    /// ([`super::Scene::validate`]). Only the photon powers need it exact for
+    /// the map to be unbiased; a textured light's weights use its true
+    /// radiance over the true pdf, so even an approximate power cancels.
     pub fn power(&self) -> Vec3 {
-        self.emission.radiance
-            * self.area
+        self.radiance_integral()
             * self.emission.profile.projected_integral()
             * self.emission.sides()
     }
@@ -128,12 +150,36 @@ impl AreaLight {
     /// `u_tri` picks the triangle. A two-sided light picks the face with
     /// the first half of `u_dir[0]` (front below 1/2, rescaled), so a
     /// one-sided light's photons are unchanged by the option existing.
+    ///
+    /// A textured light places the point by emitted power
+    /// ([`Self::sample_point`]) and weights the photon by its flux over the
+    /// mean: `L0(x) sides (2 pi / (n + 2)) / pdf_area(x) / power`.
     #[inline]
     pub fn sample(&self, u_tri: f32, u_pos: [f32; 2], u_dir: [f32; 2]) -> EmittedPhoton {
-        let i = self.triangle_at(u_tri * self.area);
-        let [a, b, c] = self.triangles[i];
-        let (b0, b1) = uniform_triangle(u_pos);
-        let origin = a * b0 + b * b1 + c * (1.0 - b0 - b1);
+        let (i, origin, weight) = match &self.map {
+            None => {
+                let i = self.triangle_at(u_tri * self.area);
+                let [a, b, c] = self.triangles[i];
+                let (b0, b1) = uniform_triangle(u_pos);
+                (i, a * b0 + b * b1 + c * (1.0 - b0 - b1), Vec3::ONE)
+            }
+            Some(_) => {
+                let p = self.sample_point(u_tri, u_pos);
+                let per_area = self.emission.profile.projected_integral() * self.emission.sides();
+                let flux = p.radiance * per_area / p.pdf_area;
+                let power = self.power();
+                let w = Vec3::new(
+                    ratio(flux.x, power.x),
+                    ratio(flux.y, power.y),
+                    ratio(flux.z, power.z),
+                );
+                (
+                    p.triangle,
+                    p.position,
+                    if w.is_finite() { w } else { Vec3::ZERO },
+                )
+            }
+        };
         let frame = &self.frames[i];
         let (u_dir, back) = match self.emission.two_sided {
             false => (u_dir, false),
@@ -151,7 +197,7 @@ impl AreaLight {
             origin,
             direction,
             normal: Some(normal),
-            weight: Vec3::ONE,
+            weight,
         }
     }
 }

@@ -1,13 +1,16 @@
 //! The scene model: triangle meshes with a material each, area lights made of
-//! emissive meshes with a `cos^n` profile, punctual lights (point, spot and
-//! directional), and an optional camera.
+//! emissive meshes with a `cos^n` profile (their radiance varying over the
+//! surface with an emissive texture: [`Scene::set_emission_texture`]),
+//! punctual lights (point, spot and directional), and an optional camera.
 //!
 //! Scenes come from glTF 2.0 files (`Scene::load`), from the built-in Cornell box
 //! (`Scene::cornell`; both with the feature `gltf`), or are assembled in code
 //! ([`Scene::new`], [`Scene::add_mesh`]).
 //! Only what the scene uses is modelled: the directionality analysis later runs on
-//! the emitters and materials found here, nothing else.
+//! the emitters and materials found here, nothing else. A material may cut
+//! holes (glTF `alphaMode: MASK`, [`AlphaMask`]) that rays pass through.
 
+mod alpha;
 #[cfg(feature = "gltf")]
 mod assets;
 #[cfg(feature = "gltf")]
@@ -16,10 +19,15 @@ mod checks;
 #[cfg(feature = "gltf")]
 mod cornell;
 mod directional;
+mod emission_cells;
+mod emission_map;
+mod emissive;
 #[cfg(feature = "gltf")]
 pub mod gltf_checks;
 #[cfg(feature = "gltf")]
 mod gltf_data;
+#[cfg(feature = "gltf")]
+mod gltf_emissive;
 #[cfg(feature = "gltf")]
 mod gltf_graph;
 #[cfg(feature = "gltf")]
@@ -47,8 +55,10 @@ pub use gltf_images::MAX_TEXELS;
 #[cfg(feature = "gltf")]
 pub use gltf_load::LoadOptions;
 
+pub use alpha::{AlphaMask, Cutout};
 pub use directional::DirectionalLight;
-pub use light::{AreaLight, EmittedPhoton, Light, PointLight, SpotLight};
+pub use emission_map::MAX_CELLS;
+pub use light::{AreaLight, EmittedPhoton, Light, LightPoint, PointLight, SpotLight};
 pub use normal_map::NormalMap;
 pub use prepared::PreparedScene;
 pub use surface::{consistent_with_geometry, photon_shading_factor, SurfacePoint, SurfaceSampler};
@@ -309,6 +319,12 @@ pub struct Scene {
     pub(crate) textures: Vec<Texture>,
     /// Per material, its textures (`None`, or past the end: untextured).
     pub(crate) material_maps: Vec<Option<MaterialMaps>>,
+    /// Per material, its emissive texture (`None`, or past the end: none).
+    pub(crate) emission_textures: Vec<Option<TextureRef>>,
+    /// Emissive textures as their lights share them (one copy each).
+    pub(crate) shared_textures: Vec<Option<std::sync::Arc<Texture>>>,
+    /// Per material, its alpha mask (`None`, or past the end: opaque).
+    pub(crate) alpha_masks: Vec<Option<AlphaMask>>,
     /// Bounds of every kept triangle's vertices, `None` before the first
     /// mesh: kept as meshes are added, so that directional lights can be
     /// refitted to it without a pass over all the geometry.
@@ -711,6 +727,7 @@ impl Scene {
             }));
         }
         self.check_texcoords()?;
+        self.check_emission_texcoords()?;
         checks::check_directional_powers(&self.lights)?;
         // In f64: forty lights of 1e37 W each summed to infinity in f32.
         let total = self.lights.iter().fold([0.0f64; 3], |mut t, l| {

@@ -26,10 +26,23 @@ impl<C: RayCaster> PreparedScene<C> {
     /// What [`Scene::validate`] reports (no light, no triangle, lights too
     /// bright together), and what [`RayCaster::check_scene`] reports (with
     /// Embree: a geometry or material count that does not match the scene's
-    /// meshes).
+    /// meshes, or a mesh with holes whose geometry has no hit filter); a
+    /// scene with alpha-mask holes for a caster that does not cut them
+    /// ([`RayCaster::cuts_alpha_masks`]).
     pub fn new(scene: Scene, caster: C) -> Result<Self> {
         scene.validate()?;
         caster.check_scene(&scene)?;
+        if !caster.cuts_alpha_masks() {
+            if let Some(mesh) = (0..scene.meshes.len()).find(|&m| scene.mesh_has_holes(m)) {
+                let m = &scene.meshes[mesh];
+                return Err(crate::Error::InvalidScene(format!(
+                    "mesh `{}` has material `{}` with an alpha mask that cuts holes \
+                     (alphaMode MASK), but the ray caster does not cut them \
+                     (RayCaster::cuts_alpha_masks): its cut-outs would be traced as walls",
+                    m.name, scene.materials[m.material].name
+                )));
+            }
+        }
         Ok(PreparedScene { scene, caster })
     }
 }

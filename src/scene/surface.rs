@@ -19,12 +19,16 @@ pub struct SurfacePoint {
     pub mesh: usize,
 }
 
-/// Samples points uniformly by area over every triangle of a scene.
+/// Samples points uniformly by area over every triangle of a scene, the
+/// holes of alpha masks left out ([`Scene::is_hole`]).
 #[derive(Clone, Debug)]
 pub struct SurfaceSampler {
-    triangles: Vec<([Vec3; 3], usize)>,
+    /// Each triangle, its mesh and its index there.
+    triangles: Vec<([Vec3; 3], usize, u32)>,
     cdf: Vec<f64>,
     total: f64,
+    /// Per mesh, its holes.
+    cutouts: Vec<Option<super::Cutout>>,
 }
 
 impl SurfaceSampler {
@@ -37,7 +41,7 @@ impl SurfaceSampler {
             for i in 0..m.indices.len() {
                 let t = m.triangle(i);
                 acc += triangle_area(t) as f64;
-                triangles.push((t, mi));
+                triangles.push((t, mi, i as u32));
                 cdf.push(acc);
             }
         }
@@ -45,15 +49,17 @@ impl SurfaceSampler {
             triangles,
             cdf,
             total: acc,
+            cutouts: (0..scene.meshes.len()).map(|m| scene.cutout(m)).collect(),
         }
     }
 
-    /// Total area.
+    /// Total area of the triangles, holes included.
     pub fn total_area(&self) -> f64 {
         self.total
     }
 
-    /// One point from three uniforms.
+    /// One point from three uniforms; `None` when it falls in a hole (or
+    /// the scene has no area).
     pub fn sample(&self, u_sel: f64, u: [f32; 2]) -> Option<SurfacePoint> {
         if self.triangles.is_empty() || self.total <= 0.0 {
             return None;
@@ -63,8 +69,15 @@ impl SurfaceSampler {
             .cdf
             .partition_point(|&c| c < target)
             .min(self.triangles.len() - 1);
-        let ([a, b, c], mesh) = self.triangles[i];
+        let ([a, b, c], mesh, prim) = self.triangles[i];
         let (b0, b1) = crate::sampling::uniform_triangle(u);
+        // Barycentrics of vertices 1 and 2, as a hit reports them.
+        let in_hole = self.cutouts[mesh]
+            .as_ref()
+            .is_some_and(|h| h.is_hole(prim, b1, 1.0 - b0 - b1));
+        if in_hole {
+            return None;
+        }
         Some(SurfacePoint {
             position: a * b0 + b * b1 + c * (1.0 - b0 - b1),
             normal: (b - a).cross(c - a).normalize(),
@@ -72,7 +85,8 @@ impl SurfaceSampler {
         })
     }
 
-    /// `count` points fixed by `seed` (point `i` depends only on `seed` and `i`).
+    /// `count` points fixed by `seed` (point `i` depends only on `seed` and
+    /// `i`), less those that fall in holes.
     pub fn points(&self, count: usize, seed: u64) -> Vec<SurfacePoint> {
         (0..count)
             .filter_map(|i| {

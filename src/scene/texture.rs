@@ -16,6 +16,8 @@
 //! - Colour: a base colour or emissive texture holds sRGB-encoded values,
 //!   decoded to linear before filtering; metallic-roughness, occlusion and
 //!   normal textures hold linear values ([`Encoding`]).
+//! - Alpha ([`Texture::alpha`], glTF `alphaMode: MASK`): the texel's 8-bit
+//!   alpha over 255, linear in both encodings, filtered like the colour.
 //! - `KHR_texture_transform`: `uv' = offset + R(rotation) (scale * uv)`
 //!   with `R = [[cos, sin], [-sin, cos]]` (the extension's
 //!   `translation * rotation * scale` matrix), and its `texCoord`, when
@@ -23,7 +25,7 @@
 
 use crate::error::{Error, Result};
 use glam::{Vec2, Vec4};
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 /// How a texture coordinate outside [0, 1] is brought back into the image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -110,12 +112,13 @@ pub struct TextureRef {
     pub transform: TexTransform,
 }
 
-/// An image of 8-bit RGBA texels with its sampler.
+/// An image of 8-bit RGBA texels with its sampler. Cloning shares the
+/// texels (an alpha mask's [`super::Cutout`] holds a clone).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     width: u32,
     height: u32,
-    texels: Vec<[u8; 4]>,
+    texels: Arc<[[u8; 4]]>,
     /// How the texture is read.
     pub sampler: Sampler,
 }
@@ -183,7 +186,7 @@ impl Texture {
         Ok(Texture {
             width,
             height,
-            texels,
+            texels: texels.into(),
             sampler,
         })
     }
@@ -203,11 +206,16 @@ impl Texture {
         &self.texels
     }
 
-    /// Texel `(i, j)` (wrapped) decoded to [0, 1].
-    fn texel(&self, i: i64, j: i64, encoding: Encoding) -> Vec4 {
+    /// Texel `(i, j)` (wrapped), as stored.
+    fn raw_texel(&self, i: i64, j: i64) -> [u8; 4] {
         let x = wrap_index(i, self.width, self.sampler.wrap_u);
         let y = wrap_index(j, self.height, self.sampler.wrap_v);
-        let [r, g, b, a] = self.texels[y * self.width as usize + x];
+        self.texels[y * self.width as usize + x]
+    }
+
+    /// Texel `(i, j)` (wrapped) decoded to [0, 1].
+    pub(crate) fn texel(&self, i: i64, j: i64, encoding: Encoding) -> Vec4 {
+        let [r, g, b, a] = self.raw_texel(i, j);
         let alpha = f32::from(a) / 255.0;
         match encoding {
             Encoding::Srgb => {
@@ -239,6 +247,38 @@ impl Texture {
                 top.lerp(bottom, fy)
             }
         }
+    }
+
+    /// The filtered alpha at `uv`, in [0, 1]: what
+    /// [`sample`](Self::sample)`(uv, Encoding::Srgb).w` gives, bit for bit,
+    /// reading one channel instead of four.
+    pub fn alpha(&self, uv: Vec2) -> f32 {
+        let a = |i: i64, j: i64| f32::from(self.raw_texel(i, j)[3]) / 255.0;
+        // `Vec4::lerp`'s formula, so the result is `sample`'s alpha exactly.
+        let lerp = |p: f32, q: f32, s: f32| p * (1.0 - s) + q * s;
+        let x = texel_coordinate(uv.x, self.width);
+        let y = texel_coordinate(uv.y, self.height);
+        match self.sampler.filter {
+            Filter::Nearest => a(x.floor() as i64, y.floor() as i64),
+            Filter::Linear => {
+                let (x, y) = (x - 0.5, y - 0.5);
+                let (i, j) = (x.floor(), y.floor());
+                let (fx, fy) = ((x - i) as f32, (y - j) as f32);
+                let (i, j) = (i as i64, j as i64);
+                let top = lerp(a(i, j), a(i + 1, j), fx);
+                let bottom = lerp(a(i, j + 1), a(i + 1, j + 1), fx);
+                lerp(top, bottom, fy)
+            }
+        }
+    }
+
+    /// The least and the greatest texel alpha, in [0, 1]: the filtered
+    /// alpha lies between them (up to a rounding of the blend).
+    pub fn alpha_range(&self) -> (f32, f32) {
+        let (lo, hi) = self.texels.iter().fold((u8::MAX, u8::MIN), |(lo, hi), t| {
+            (lo.min(t[3]), hi.max(t[3]))
+        });
+        (f32::from(lo) / 255.0, f32::from(hi) / 255.0)
     }
 
     /// The mean of the decoded texels (what a flat factor would be).
@@ -376,6 +416,26 @@ mod tests {
         }
         assert!(Texture::new(0, 2, vec![], Sampler::default()).is_err());
         assert!(Texture::new(2, 2, vec![[0; 4]; 3], Sampler::default()).is_err());
+    }
+
+    #[test]
+    fn alpha_is_the_sampled_alpha_bit_for_bit() {
+        let mut rng = crate::rng::Rng::new(3);
+        for filter in [Filter::Nearest, Filter::Linear] {
+            for wrap in [Wrap::Repeat, Wrap::ClampToEdge, Wrap::MirroredRepeat] {
+                let t = four(filter, wrap);
+                for _ in 0..2000 {
+                    let uv = Vec2::new(rng.next_f32() * 6.0 - 3.0, rng.next_f32() * 6.0 - 3.0);
+                    let want = t.sample(uv, Encoding::Srgb).w;
+                    assert_eq!(
+                        t.alpha(uv).to_bits(),
+                        want.to_bits(),
+                        "{uv} {filter:?} {wrap:?}"
+                    );
+                }
+            }
+        }
+        assert_eq!(four(Filter::Linear, Wrap::Repeat).alpha_range(), (0.0, 1.0));
     }
 
     #[test]

@@ -13,8 +13,8 @@
 //!
 //! As glTF says (§3.9.2): base colour = `baseColorFactor * texel` (the
 //! texel sRGB-decoded), metalness = `metallicFactor * texel.b`, roughness =
-//! `roughnessFactor * texel.g` (linear). Texture alpha is not used (no
-//! `alphaMode` is modelled).
+//! `roughnessFactor * texel.g` (linear). Texture alpha does not shade: with
+//! `alphaMode: MASK` it cuts holes ([`super::alpha`]), where no ray stops.
 //!
 //! A point scatters in its material's class: the textures of a mirror or of
 //! glass are not read (the tracer stores photons, and camera paths stop,
@@ -99,7 +99,8 @@ impl Scene {
             m.texcoords.resize(set + 1, Vec::new());
         }
         m.texcoords[set] = uvs;
-        Ok(())
+        // An emissive texture reading this set now shapes the mesh's light.
+        self.texture_area_light(mesh)
     }
 
     /// Textures material `material`, and sets its [`super::Material::brdf`]
@@ -203,13 +204,17 @@ impl Scene {
     }
 
     /// Checks that every mesh has the texture coordinates its material's
-    /// textures read.
+    /// textures (and its alpha mask's) read.
     pub(super) fn check_texcoords(&self) -> Result<()> {
         for mesh in &self.meshes {
-            let Some(maps) = self.material_maps(mesh.material) else {
-                continue;
-            };
-            for r in maps.refs() {
+            let maps = self
+                .material_maps(mesh.material)
+                .into_iter()
+                .flat_map(MaterialMaps::refs);
+            let mask = self
+                .alpha_mask(mesh.material)
+                .and_then(|m| m.texture.as_ref());
+            for r in maps.chain(mask) {
                 if mesh.texcoords.get(r.tex_coord).is_none_or(Vec::is_empty) {
                     return Err(Error::InvalidScene(format!(
                         "mesh `{}` has no TEXCOORD_{}, which its material `{}` reads",

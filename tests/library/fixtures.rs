@@ -16,6 +16,9 @@ impl RayCaster for OneByOne {
     fn occluded(&self, ray: &Ray) -> bool {
         self.0.occluded(ray)
     }
+    fn cuts_alpha_masks(&self) -> bool {
+        self.0.cuts_alpha_masks()
+    }
 }
 
 /// The CPU's vendor string (`vendor_id` of /proc/cpuinfo), if readable.

@@ -147,10 +147,43 @@ impl Doc {
         if !self.extensions_used.is_empty() {
             doc["extensionsUsed"] = json!(self.extensions_used);
         }
+        // KHR_mesh_quantization changes what accessors may hold: a file that
+        // uses it must require it (the Khronos validator: NON_REQUIRED_EXTENSION).
+        if self.extensions_used.contains(&"KHR_mesh_quantization") {
+            doc["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+        }
         let path = dir.join("scene.gltf");
         std::fs::write(&path, doc.to_string()).unwrap();
+        dump_for_the_validator(&doc);
         path
     }
+}
+
+/// The folder that `scripts/ci-gltf-validator-generated.sh` has the tests
+/// copy every document they write into, for the Khronos validator.
+pub(crate) const DUMP_ENV: &str = "ADAPTIVE_PM_GLTF_DUMP";
+
+/// With [`DUMP_ENV`] set, keeps a copy of `doc` named after the test that
+/// wrote it and its rank among that test's documents (tests run one per
+/// thread, so the names are the same from run to run).
+fn dump_for_the_validator(doc: &Value) {
+    let Ok(dir) = std::env::var(DUMP_ENV) else {
+        return;
+    };
+    thread_local! {
+        static WRITTEN: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+    }
+    let rank = WRITTEN.with(|w| {
+        w.set(w.get() + 1);
+        w.get()
+    });
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("unnamed")
+        .replace("::", "__");
+    let dir = PathBuf::from(dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join(format!("{test}-{rank}.gltf")), doc.to_string()).unwrap();
 }
 
 /// A unit square in the plane y = 0, wound to face +y (`up`) or -y.

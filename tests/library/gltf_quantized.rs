@@ -210,15 +210,9 @@ fn scene_doc(storage: Option<Storage>, normal_up: bool) -> Doc {
     doc
 }
 
-/// Writes `doc` into `dir`, requiring the extension when it uses it.
+/// Writes `doc` into `dir` (requiring the extension when it uses it: `Doc::write`).
 fn write(doc: &Doc, dir: &Path) -> PathBuf {
-    let path = doc.write(dir);
-    if !doc.extensions_used.is_empty() {
-        edit(&path, |v| {
-            v["extensionsRequired"] = json!(["KHR_mesh_quantization"])
-        });
-    }
-    path
+    doc.write(dir)
 }
 
 fn edit(path: &Path, change: impl Fn(&mut Value)) {

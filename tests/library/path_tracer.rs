@@ -283,13 +283,19 @@ fn photon_mean_with(
 /// the path tracer's mean from its halves pixel by pixel.
 #[test]
 fn photon_and_path_renders_agree_within_the_photon_bias() {
+    assert_photon_and_path_agree(Scene::cornell().unwrap(), 10);
+}
+
+/// The check of [`photon_and_path_renders_agree_within_the_photon_bias`] on
+/// any scene with a camera, with `runs` photon runs at each count (also run
+/// on a Cornell box with an alpha-masked fence, `gltf_alpha_mask.rs`).
+pub(crate) fn assert_photon_and_path_agree(scene: Scene, runs: u64) {
     let device = Device::new().unwrap();
-    let scene = Scene::cornell().unwrap();
-    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
+    let prepared = Arc::new(scene.commit(&device).unwrap());
     let (keep, path, path_se) = path_reference(&prepared, 24, 256);
     let n = 50_000;
     let runs = |n_max: u64| {
-        let v: Vec<f64> = (0..10u64)
+        let v: Vec<f64> = (0..runs)
             .map(|j| {
                 let seed = crate::common::seed(1 + 1000 * j);
                 photon_mean_with(&prepared, (Mode::Classic, n_max), (24, 16, 1), seed, &keep).0

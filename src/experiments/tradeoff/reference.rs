@@ -77,7 +77,8 @@ fn fnv(bytes: &[u8], mut h: u64) -> u64 {
     h
 }
 
-/// A hash of what the scene *is*: geometry, materials, textures, lights and camera
+/// A hash of what the scene *is*: geometry, materials, textures (emissive ones
+/// too), lights and camera
 /// (their exact float values through `Debug`), not where it came from.
 pub fn scene_hash(scene: &Scene) -> u64 {
     let text = format!(
@@ -85,6 +86,13 @@ pub fn scene_hash(scene: &Scene) -> u64 {
         scene.materials, scene.meshes, scene.lights, scene.camera, scene.material_maps
     );
     let mut h = fnv(text.as_bytes(), 0xcbf2_9ce4_8422_2325);
+    // Only when there are any: the keys of scenes without stay as they were.
+    if scene.emission_textures.iter().any(Option::is_some) {
+        h = fnv(format!("{:?}", scene.emission_textures).as_bytes(), h);
+    }
+    if scene.alpha_masks.iter().any(Option::is_some) {
+        h = fnv(format!("{:?}", scene.alpha_masks).as_bytes(), h);
+    }
     for t in &scene.textures {
         let head = format!("{}x{} {:?}", t.width(), t.height(), t.sampler);
         h = fnv(head.as_bytes(), h);
