@@ -20,6 +20,22 @@
 //! every light's ids, as the main trace's; the shards' photons together
 //! are the whole pass's, but each shard encodes in its own power frame.
 //!
+//! ```no_run
+//! # #[cfg(all(feature = "embree", feature = "gltf"))] {
+//! use adaptive_pm::embree::Device;
+//! use adaptive_pm::engine::{default_caustic_photons, Budget, Maps, Mode, TraceConfig, Tracer};
+//! use adaptive_pm::scene::{Scene, BUILTIN_CORNELL_GLASS};
+//!
+//! let tracer = Tracer::new(Scene::open(BUILTIN_CORNELL_GLASS)?.commit(&Device::new()?)?);
+//! let cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(1_000_000));
+//! let main = tracer.trace(&cfg)?;
+//! let pass = tracer.trace_caustic(&cfg, default_caustic_photons(tracer.scene(), 1_000_000))?;
+//! // The renderer's maps, their caustic map the pass's.
+//! let maps = Maps::full_only(main.photons, main.frame).with_caustic_pass(pass);
+//! # }
+//! # Ok::<(), adaptive_pm::Error>(())
+//! ```
+//!
 //! No splitting: the pass follows few bounces, and every photon it emits
 //! is already aimed; Russian roulette alone decides survival, so a pass
 //! stores at most one photon per photon emitted. The memory budget counts
