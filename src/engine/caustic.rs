@@ -46,6 +46,7 @@
 use super::albedo::AlbedoTable;
 use super::buffer::trace_wave;
 use super::caustic_aim::CausticAim;
+pub use super::caustic_budget::{default_caustic_photons, CausticBudget, DEFAULT_CAUSTIC_SHARE};
 use super::caustic_emit::aimed_photon;
 use super::config::{CheckedConfig, TraceConfig};
 use super::stream::WAVE;
@@ -69,67 +70,6 @@ pub const CAUSTIC_STREAM: u64 = 0xCA05_71C0_0000_0001;
 /// then compact.
 pub const BYTES_PER_CAUSTIC_PHOTON: u64 =
     (std::mem::size_of::<PhotonRecord>() + std::mem::size_of::<CompactPhoton>()) as u64;
-
-/// The default caustic photon count as a share of `N_MAX`
-/// ([`default_caustic_photons`]).
-pub const DEFAULT_CAUSTIC_SHARE: f64 = 1.0;
-
-/// The caustic photons a run emits by default: `DEFAULT_CAUSTIC_SHARE *
-/// N_MAX` when the scene has a specular mesh and a light, else 0. It
-/// follows the quality knob as `N_MAX` does (`Q^2 INT_MAX`).
-pub fn default_caustic_photons(scene: &Scene, n_max: u64) -> u64 {
-    if scene.lights().is_empty() || CausticAim::new(scene).is_empty() {
-        0
-    } else {
-        (n_max as f64 * DEFAULT_CAUSTIC_SHARE).round() as u64
-    }
-}
-
-/// How many photons a caustic pass emits: the default for the scene and
-/// `N_MAX` ([`default_caustic_photons`]), or a count (0: no pass).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub enum CausticBudget {
-    /// [`default_caustic_photons`].
-    #[default]
-    Auto,
-    /// This many (0: no pass).
-    Photons(u64),
-}
-
-impl CausticBudget {
-    /// The count for a scene and `N_MAX`.
-    pub fn photons(self, scene: &Scene, n_max: u64) -> u64 {
-        match self {
-            CausticBudget::Auto => default_caustic_photons(scene, n_max),
-            CausticBudget::Photons(n) => n,
-        }
-    }
-}
-
-impl std::fmt::Display for CausticBudget {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            CausticBudget::Auto => f.write_str("auto"),
-            CausticBudget::Photons(n) => write!(f, "{n}"),
-        }
-    }
-}
-
-impl std::str::FromStr for CausticBudget {
-    type Err = Error;
-    /// `auto` or a photon count.
-    fn from_str(s: &str) -> Result<Self> {
-        match s.trim() {
-            "auto" => Ok(CausticBudget::Auto),
-            n => n.parse().map(CausticBudget::Photons).map_err(|_| {
-                Error::param(
-                    "caustic photons",
-                    format!("`{s}` is neither `auto` nor a photon count"),
-                )
-            }),
-        }
-    }
-}
 
 /// What a caustic pass did.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -379,23 +319,6 @@ fn caustic_frame(scene: &Scene, records: &[PhotonRecord]) -> Quantizer {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn budgets_parse_and_refuse_by_name() {
-        assert_eq!(
-            "auto".parse::<CausticBudget>().unwrap(),
-            CausticBudget::Auto
-        );
-        assert_eq!(
-            " 1000 ".parse::<CausticBudget>().unwrap(),
-            CausticBudget::Photons(1000)
-        );
-        for bad in ["", "-1", "1e6", "many"] {
-            let e = bad.parse::<CausticBudget>().unwrap_err().to_string();
-            assert!(e.contains("caustic photons"), "{bad}: {e}");
-        }
-        assert_eq!(CausticBudget::Photons(7).to_string(), "7");
-    }
 
     #[test]
     fn the_budget_per_photon_is_the_one_the_docs_quote() {

@@ -21,6 +21,7 @@ pub mod albedo;
 pub(crate) mod buffer;
 pub mod caustic;
 pub mod caustic_aim;
+pub mod caustic_budget;
 pub mod caustic_emit;
 pub mod config;
 pub mod counts;
