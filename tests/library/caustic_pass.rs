@@ -1,17 +1,14 @@
 //! The caustic pass (`Tracer::trace_caustic`): photons aimed at the
 //! specular objects give the main trace's caustic power, region by region,
-//! for every kind of light; the cone mixture's pdf against its samples;
-//! determinism across threads, batches and shards; only caustic photons
-//! stored; nothing to aim at, nothing traced. Each statistical check
-//! measures its own sigma from the photons it compares.
+//! for every kind of light (the sampler is in `caustic_aim.rs`, runs on
+//! `cornell-glass` in `caustic_runs.rs`). Each statistical check measures
+//! its own sigma from the photons it compares.
 
 use adaptive_pm::brdf::{Dielectric, Lambert, Mirror};
 use adaptive_pm::embree::Device;
 use adaptive_pm::emitter::CosN;
-use adaptive_pm::engine::caustic_aim::{CausticAim, Target};
-use adaptive_pm::engine::{default_caustic_photons, Budget, Mode, Shard, TraceConfig, Tracer};
+use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::photon_map::PhotonRecord;
-use adaptive_pm::rng::Rng;
 use adaptive_pm::sampling::luminance;
 use adaptive_pm::scene::{
     DirectionalLight, Emission, Light, Material, PointLight, Scene, SpotLight,
@@ -20,7 +17,7 @@ use glam::Vec3;
 use std::collections::BTreeMap;
 use std::f32::consts::PI;
 
-use crate::common::{self, assert_sigmas, assert_within_noise, MeanVar};
+use crate::common::{self, assert_within_noise};
 
 const MIRROR_CENTRE: Vec3 = Vec3::new(-0.6, 0.5, 0.0);
 const GLASS_CENTRE: Vec3 = Vec3::new(0.6, 0.5, 0.0);
@@ -241,206 +238,4 @@ fn the_pass_gives_the_main_traces_caustic_power_under_punctual_lights() {
     let sun = DirectionalLight::new(Vec3::new(0.3, -1.0, 0.2), Vec3::splat(2.0));
     let sun = Light::Directional(sun);
     assert_pass_matches_main("sun", spheres_over_black(punctual(sun)), 3_000_000, 300_000);
-}
-
-/// The mixture over three cones (one holding the point: every direction)
-/// integrates to 1 over the sphere (checked by uniform directions), and
-/// its samples weighted by 1/pdf measure each cone's solid angle
-/// `2 pi (1 - cos)`, overlaps included.
-#[test]
-fn the_cone_mixture_matches_its_pdf() {
-    let targets = vec![
-        Target {
-            centre: Vec3::new(0.0, 0.0, 3.0),
-            radius: 1.0,
-            mesh: 0,
-        },
-        Target {
-            centre: Vec3::new(0.8, 0.0, 3.0),
-            radius: 0.7,
-            mesh: 1,
-        },
-        Target {
-            centre: Vec3::new(0.0, -4.0, 0.5),
-            radius: 0.3,
-            mesh: 2,
-        },
-    ];
-    let x = Vec3::new(0.1, 0.2, 0.0);
-    let aim = CausticAim::from_targets(targets.clone());
-    let mut rng = Rng::new(common::seed(7));
-    let n = 400_000;
-    let mut norm = MeanVar::default();
-    for _ in 0..n {
-        let z = 1.0 - 2.0 * rng.next_f32();
-        let w = adaptive_pm::sampling::spherical_direction(z, 2.0 * PI * rng.next_f32());
-        norm.push(4.0 * PI as f64 * aim.pdf(x, None, w) as f64);
-    }
-    assert_sigmas(
-        "pdf integrates to 1",
-        norm.mean() - 1.0,
-        norm.std_error(),
-        4.5,
-    );
-    let cones: Vec<_> = targets
-        .iter()
-        .map(|t| t.cone_from(x, None).unwrap())
-        .collect();
-    let mut solid = vec![MeanVar::default(); cones.len()];
-    for _ in 0..n {
-        let d = aim.sample(x, None, rng.next_f32(), rng.next_2d()).unwrap();
-        let pdf = aim.pdf(x, None, d.direction);
-        assert!((pdf - d.pdf).abs() <= 1e-6 * pdf, "{pdf} vs {}", d.pdf);
-        for (m, c) in solid.iter_mut().zip(&cones) {
-            m.push(if c.contains(d.direction) {
-                1.0 / d.pdf as f64
-            } else {
-                0.0
-            });
-        }
-    }
-    for (j, (m, t)) in solid.iter().zip(&targets).enumerate() {
-        let d = (t.centre - x).length() as f64;
-        let exact =
-            2.0 * std::f64::consts::PI * (1.0 - (1.0 - (t.radius as f64 / d).powi(2)).sqrt());
-        assert_sigmas(
-            &format!("cone {j} solid angle"),
-            m.mean() - exact,
-            m.std_error(),
-            4.5,
-        );
-    }
-    // A one-sided emitter facing away from the third sphere (wholly below
-    // its plane) does not aim at it.
-    let facing = Some(Vec3::Y);
-    for _ in 0..1000 {
-        let d = aim
-            .sample(x, facing, rng.next_f32(), rng.next_2d())
-            .unwrap();
-        assert!(!cones[2].contains(d.direction) || cones[0].contains(d.direction));
-    }
-}
-
-fn cornell_glass() -> Tracer<adaptive_pm::embree::CommittedScene> {
-    let scene = Scene::open(adaptive_pm::scene::BUILTIN_CORNELL_GLASS).unwrap();
-    Tracer::new(scene.commit(&Device::new().unwrap()).unwrap())
-}
-
-#[test]
-fn the_pass_is_deterministic_across_threads_batches_and_shards() {
-    let tracer = cornell_glass();
-    let mut cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(1000));
-    cfg.seed = 5;
-    let n = 40_000;
-    let run = |threads: usize, batch: usize, shard: Shard| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        let mut c = cfg.clone();
-        c.batch = batch;
-        c.shard = shard;
-        pool.install(|| tracer.trace_caustic(&c, n)).unwrap()
-    };
-    let one = run(1, 1024, Shard::WHOLE);
-    let two = run(2, 7, Shard::WHOLE);
-    assert!(one.report.stored > 1000, "{:?}", one.report);
-    assert_eq!(one.photons, two.photons);
-    assert_eq!(one.report.aimed, two.report.aimed);
-    assert_eq!(one.into_map_checksum(), two.into_map_checksum());
-    // Two shards store exactly the whole pass's photons (positions and
-    // depths; each shard has its own power frame).
-    // Waves are cut from each shard's own ids, so the order differs.
-    let sorted = |mut v: Vec<PhotonRecord>| {
-        v.sort_by(|a, b| {
-            let key = |r: &PhotonRecord| (r.position.to_array(), r.depth);
-            key(a).partial_cmp(&key(b)).unwrap()
-        });
-        v
-    };
-    let whole = sorted(run(2, 1024, Shard::WHOLE).records());
-    let mut parts = sorted(
-        (0..2)
-            .flat_map(|i| run(2, 100, Shard::new(i, 2).unwrap()).records())
-            .collect(),
-    );
-    assert_eq!(parts.len(), whole.len());
-    for (a, b) in parts.iter_mut().zip(&whole) {
-        assert_eq!((a.position, a.depth), (b.position, b.depth));
-        let tol = 4.0 / 512.0 * b.power.max_element();
-        assert!(
-            (a.power - b.power).abs().max_element() <= tol,
-            "{} vs {}",
-            a.power,
-            b.power
-        );
-    }
-}
-
-/// Checksum helper: the map's hash of the pass's photons.
-trait MapChecksum {
-    fn into_map_checksum(self) -> u64;
-}
-
-impl MapChecksum for adaptive_pm::engine::CausticOutput {
-    fn into_map_checksum(self) -> u64 {
-        self.into_map().checksum()
-    }
-}
-
-#[test]
-fn the_pass_stores_only_caustic_photons_off_specular_surfaces() {
-    let tracer = cornell_glass();
-    let cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(1000));
-    let out = tracer.trace_caustic(&cfg, 20_000).unwrap();
-    assert!(out.report.stored > 500, "{:?}", out.report);
-    assert_eq!(out.report.targets, 2);
-    assert!(out.photons.iter().all(|p| p.is_caustic() && p.depth() >= 1));
-    // Every stored photon lies outside both spheres' meshes' bounds
-    // (on the box, not on a mirror or glass).
-    let aim = CausticAim::new(tracer.scene());
-    for r in out.records() {
-        for t in aim.targets() {
-            let inside = (r.position - t.centre).length() < 0.95 * t.radius;
-            assert!(!inside, "stored at {} inside target {:?}", r.position, t);
-        }
-    }
-}
-
-#[test]
-fn a_scene_without_specular_objects_makes_an_empty_pass() {
-    let scene = Scene::open(adaptive_pm::scene::BUILTIN_CORNELL_EMPTY).unwrap();
-    assert_eq!(default_caustic_photons(&scene, 1_000_000), 0);
-    let tracer = Tracer::new(scene.commit(&Device::new().unwrap()).unwrap());
-    let out = tracer
-        .trace_caustic(&TraceConfig::default(), 10_000)
-        .unwrap();
-    assert_eq!(
-        (out.report.emitted, out.report.stored, out.report.targets),
-        (0, 0, 0)
-    );
-    assert!(out.into_map().is_empty());
-    let glass = Scene::open(adaptive_pm::scene::BUILTIN_CORNELL_GLASS).unwrap();
-    assert!(default_caustic_photons(&glass, 1_000_000) > 0);
-}
-
-#[test]
-fn a_pass_over_the_memory_budget_is_refused_before_tracing() {
-    let tracer = cornell_glass();
-    let cfg = TraceConfig {
-        memory_budget: Some(1 << 20),
-        ..TraceConfig::default()
-    };
-    let e = tracer.trace_caustic(&cfg, 1_000_000).unwrap_err();
-    assert!(
-        matches!(
-            e,
-            adaptive_pm::Error::Budget {
-                photons: 1_000_000,
-                ..
-            }
-        ),
-        "{e}"
-    );
-    assert!(tracer.trace_caustic(&cfg, 1000).is_ok());
 }
