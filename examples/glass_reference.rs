@@ -7,7 +7,8 @@
 //! reference as two independent halves of REF_SPP/2 samples each (cached as
 //! OpenEXR in `target/glass-reference`, keyed by the scene, size and spp,
 //! since the reference takes minutes), renders the photon image (adaptive,
-//! gather through the cache, the other settings `render`'s defaults), and
+//! gather through the cache, the other settings `render`'s defaults, but
+//! no caustic pass: `render --caustic-photons 0`), and
 //! prints the relRMSE over the pixels that are not a light's own (its
 //! noise, from the halves, taken out in quadrature), the mean per channel
 //! against the reference's, and the same over the caustic's pixels (first

@@ -5,13 +5,16 @@ use super::common::{
     open_scene, progress_bar, AssetRootArgs, EmbreeArgs, ThreadArgs, TraceConfigArgs,
 };
 use adaptive_pm::embree::EmbreeScene;
-use adaptive_pm::engine::{Mode, TraceConfig, Tracer};
+use adaptive_pm::engine::caustic::BYTES_PER_CAUSTIC_PHOTON;
+use adaptive_pm::engine::tracer::BYTES_PER_STORED_PHOTON;
+use adaptive_pm::engine::{CausticBudget, CausticReport, Mode, TraceConfig, Tracer};
 use adaptive_pm::output::refuse_overwrite;
 use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
     cache::DEFAULT_STRIDE, check_output_path, render_checked, tile_rows, CheckedRender, Image,
     Integrator, RenderConfig, RenderMaps, RenderStats, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
 };
+use adaptive_pm::scene::Scene;
 use anyhow::Context;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -67,6 +70,14 @@ pub struct RenderArgs {
     /// the other estimates' largest radius).
     #[arg(long)]
     pub caustic_radius: Option<f32>,
+    /// Caustic photons of the caustic pass, aimed at mirrors and glass
+    /// (Jensen's projection map); the caustic map is then the pass's, not
+    /// the main trace's caustic photons. 0 turns the pass off. Default:
+    /// N_MAX (the main trace's budget) when the scene has a mirror or glass
+    /// mesh and a light, else 0 (`auto`, which shrinks to what the main
+    /// map leaves of --budget-mb); 0 with --map.
+    #[arg(long)]
+    pub caustic_photons: Option<CausticBudget>,
     /// Linear radiance, OpenEXR.
     #[arg(long)]
     pub out: PathBuf,
@@ -109,12 +120,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         return super::render_path::run_path(&args, &prepared, &cfg, &pool);
     }
     let bar = progress_bar(!args.json);
-    let (maps, trace_s, photons) = if cfg.view == View::DirectOnly {
-        (None, 0.0, 0)
+    let (maps, trace_s, photons, caustic) = if cfg.view == View::DirectOnly {
+        (None, 0.0, 0, None)
     } else {
         let (maps, trace_s, photons) =
             photon_maps(&args, &prepared, &trace_cfg, &cfg, &pool, &bar)?;
-        (Some(maps), trace_s, photons)
+        let (maps, caustic) = caustic_pass(&args, &prepared, &trace_cfg, &cfg, &pool, maps)?;
+        let caustic_s = caustic.as_ref().map_or(0.0, |c| c.trace_s);
+        (Some(maps), trace_s + caustic_s, photons, caustic)
     };
     bar.set_position(0);
     bar.set_length(args.height as u64);
@@ -142,8 +155,72 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         map_build_s: maps.as_ref().map_or(0.0, |m| m.build_total_s()),
         render_s,
     };
-    report(&args, &cfg, &image, &stats, photons, &times);
+    report(
+        &args,
+        &cfg,
+        &image,
+        &stats,
+        photons,
+        &times,
+        caustic.as_ref(),
+    );
     Ok(())
+}
+
+/// The caustic pass's photon count: `--caustic-photons`, else the default
+/// for a traced run (`auto`: `engine::default_caustic_photons`) and 0
+/// with `--map`.
+fn caustic_count(args: &RenderArgs, scene: &Scene, trace_cfg: &TraceConfig) -> anyhow::Result<u64> {
+    let n_max = trace_cfg.budget.n_max()?;
+    Ok(match (args.caustic_photons, &args.map) {
+        (Some(c), _) => c.photons(scene, n_max),
+        (None, Some(_)) => 0,
+        (None, None) => CausticBudget::Auto.photons(scene, n_max),
+    })
+}
+
+/// Runs the caustic pass when the render reads the caustic map (the full
+/// view) and the count is not 0, its map replacing the main trace's
+/// caustic map.
+fn caustic_pass(
+    args: &RenderArgs,
+    prepared: &Arc<EmbreeScene>,
+    trace_cfg: &TraceConfig,
+    cfg: &RenderConfig,
+    pool: &rayon::ThreadPool,
+    maps: RenderMaps,
+) -> anyhow::Result<(RenderMaps, Option<CausticReport>)> {
+    let n = caustic_count(args, prepared.scene(), trace_cfg)?;
+    if n == 0 || cfg.view != View::Full {
+        return Ok((maps, None));
+    }
+    // The pass gets what the main map left of the budget; `auto` shrinks
+    // to fit it, a count asked for is refused when it does not.
+    let used = maps.full.len() as u64 * BYTES_PER_STORED_PHOTON;
+    let left = trace_cfg.check()?.memory_budget().saturating_sub(used);
+    let n = match args.caustic_photons {
+        None | Some(CausticBudget::Auto) => n.min(left / BYTES_PER_CAUSTIC_PHOTON),
+        Some(CausticBudget::Photons(_)) => n,
+    };
+    if n == 0 {
+        return Ok((maps, None));
+    }
+    let mut pass_cfg = trace_cfg.clone();
+    pass_cfg.memory_budget = Some(left);
+    let tracer = Tracer::new(Arc::clone(prepared));
+    let pass = pool.install(|| tracer.trace_caustic(&pass_cfg, n))?;
+    let report = pass.report.clone();
+    Ok((pool.install(|| maps.with_caustic_pass(pass)), Some(report)))
+}
+
+/// The caustic pass's line of the text report.
+fn print_caustic(caustic: Option<&CausticReport>) {
+    if let Some(c) = caustic {
+        println!(
+            "caustic pass: {} photons emitted ({} aimed at {} specular meshes), {} stored, {:.3} s",
+            c.emitted, c.aimed, c.targets, c.stored, c.trace_s
+        );
+    }
 }
 
 /// The render settings the arguments ask for, checked (once: the render
@@ -235,6 +312,7 @@ fn report(
     stats: &RenderStats,
     photons: usize,
     times: &Times,
+    caustic: Option<&CausticReport>,
 ) {
     let mean = image.mean();
     let samples_per_s = stats.samples as f64 / times.render_s.max(1e-9);
@@ -264,6 +342,7 @@ fn report(
                 "cache_misses": stats.cache_misses,
                 "dropped_samples": stats.dropped_samples,
                 "mean_rgb": [mean.x, mean.y, mean.z],
+                "caustic_pass": caustic,
                 "out": args.out,
             })
         );
@@ -286,6 +365,7 @@ fn report(
         "{samples_per_s:.0} samples/s, lookups {:.3} s (thread sum), cache {cache_n} cells built in {cache_s:.3} s",
         stats.lookup_s
     );
+    print_caustic(caustic);
     println!("mean RGB {:.4} {:.4} {:.4}", mean.x, mean.y, mean.z);
     println!("wrote {}", args.out.display());
     if let Some(p) = &args.png {

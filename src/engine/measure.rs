@@ -137,6 +137,22 @@ impl Maps {
         }
     }
 
+    /// These maps with their caustic map taken from a caustic pass
+    /// ([`crate::engine::Tracer::trace_caustic`]) instead of the main
+    /// trace's caustic photons, which stay in `full` (the gather reads them
+    /// at secondary hits) but no longer in `caustic`: a caustic is counted
+    /// once, from the pass. `build_caustic_s` adds the new tree's build
+    /// to the time of the one it replaces (both were spent).
+    pub fn with_caustic_pass(self, pass: super::CausticOutput) -> Self {
+        let t = Instant::now();
+        let caustic = pass.into_map();
+        Maps {
+            caustic,
+            build_caustic_s: self.build_caustic_s + t.elapsed().as_secs_f64(),
+            ..self
+        }
+    }
+
     /// True when the primary and indirect maps are empty but the full map
     /// is not: built by [`Maps::full_only`] (a real split of a non-empty
     /// map always has photons in one of them).

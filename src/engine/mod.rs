@@ -1,5 +1,7 @@
 //! The photon engine: wavefront tracing in three modes (docs/method.md,
-//! "Photon counts", "Caps and global budget" and "The three modes").
+//! "Photon counts", "Caps and global budget" and "The three modes"), and a
+//! caustic pass aimed at the specular objects ([`caustic`], docs/method.md,
+//! "The caustic pass").
 //!
 //! ```no_run
 //! use adaptive_pm::embree::Device;
@@ -17,6 +19,10 @@
 
 pub mod albedo;
 pub(crate) mod buffer;
+pub mod caustic;
+pub mod caustic_aim;
+pub mod caustic_budget;
+pub mod caustic_emit;
 pub mod config;
 pub mod counts;
 mod density_control;
@@ -29,6 +35,8 @@ pub mod tracer;
 pub mod wave;
 
 pub use buffer::{map_frame, POWER_HEADROOM};
+pub use caustic::{default_caustic_photons, CausticBudget, CausticOutput, CausticReport};
+pub use caustic_aim::CausticAim;
 pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig, PAPER_N_MAX};
 pub use measure::{density_points, map_density, map_metrics, primary_density, MapMetrics, Maps};
 pub use report::{DepthStats, TraceReport};

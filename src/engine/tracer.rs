@@ -306,6 +306,7 @@ impl<C: RayCaster> Tracer<C> {
                 split_cap: cfg.split_cap(),
                 continue_paths: depth < cfg.max_depth() as usize,
                 keep_records: density.is_some(),
+                caustic_only: false,
                 frame,
                 epsilon,
                 depth: depth as u8,

@@ -58,6 +58,10 @@ pub(super) struct ShadeContext<'a, C> {
     /// Density control: stored photons go to `BatchOut::records` with their
     /// shading normals, not into the map buffer.
     pub keep_records: bool,
+    /// The caustic pass: a photon is stored only as a caustic photon (to
+    /// `BatchOut::records`, without normals) and ends at its first
+    /// non-specular hit, stored or not.
+    pub caustic_only: bool,
     /// The frame photons are encoded in (the map's).
     pub frame: Quantizer,
     /// Offset of new ray origins from surfaces.
@@ -168,6 +172,12 @@ fn shade_hit<C>(
             depth: ctx.depth,
             caustic: p.specular_chain && ctx.depth > 0,
         };
+        if ctx.caustic_only {
+            if record.caustic && position.is_finite() && power.is_finite() {
+                out.records.push(record);
+            }
+            return;
+        }
         if ctx.keep_records {
             out.records.push(record);
             // Surfaces are two-sided: the normal on the side the photon arrives from.

@@ -27,7 +27,7 @@
 //!   them too; the photon render's search goes on until both the whole
 //!   image and the caustic's pixels reach the target.
 
-use crate::engine::{Budget, Mode, TraceConfig, Tracer};
+use crate::engine::{Budget, CausticBudget, Mode, TraceConfig, Tracer};
 use crate::error::{Error, Result};
 use crate::raycast::RayCaster;
 use crate::render::{
@@ -54,6 +54,9 @@ pub struct StudyConfig {
     pub path_spp: u32,
     /// Photon budgets (N_MAX) to try.
     pub n_max: Vec<u64>,
+    /// Caustic passes to try with each budget (`Auto`: the renderer's
+    /// default; `Photons(0)`: none, the main trace's caustic photons).
+    pub caustic: Vec<CausticBudget>,
     /// Largest spp of a photon render.
     pub max_spp: u32,
     /// Error target (relRMSE, e.g. 0.03).
@@ -76,6 +79,12 @@ pub struct PhotonRow {
     pub n_max: u64,
     /// Photons stored.
     pub photons: usize,
+    /// Photons the caustic pass emitted (0: no pass).
+    pub caustic_photons: u64,
+    /// Caustic photons it stored.
+    pub caustic_stored: u64,
+    /// Seconds of the caustic pass (in `total_s`).
+    pub caustic_s: f64,
     /// Seconds to trace.
     pub trace_s: f64,
     /// Seconds to build the three maps.
@@ -95,7 +104,7 @@ pub struct PhotonRow {
     pub caustic_rel_rmse: Option<f64>,
     /// Mean bias per channel.
     pub bias: [f64; 3],
-    /// trace + maps + render.
+    /// trace + caustic pass + maps + render.
     pub total_s: f64,
 }
 
@@ -353,7 +362,10 @@ pub fn run_study<C: RayCaster>(
     let path = time_path(prepared, &base, cfg, &judge, log)?;
     let mut rows = Vec::new();
     for &n_max in &cfg.n_max {
-        photon_budget(tracer, &base, cfg, &judge, n_max, log, &mut rows)?;
+        for &caustic in &cfg.caustic {
+            let budget = (n_max, caustic);
+            photon_budget(tracer, &base, cfg, &judge, budget, log, &mut rows)?;
+        }
     }
     let fastest = |reached: &dyn Fn(&PhotonRow) -> bool| {
         rows.iter()
@@ -397,7 +409,7 @@ fn photon_budget<C: RayCaster>(
     base: &RenderConfig,
     cfg: &StudyConfig,
     judge: &Judge,
-    n_max: u64,
+    (n_max, caustic): (u64, CausticBudget),
     log: &dyn Fn(&str),
     rows: &mut Vec<PhotonRow>,
 ) -> Result<()> {
@@ -407,7 +419,18 @@ fn photon_budget<C: RayCaster>(
     let out = tracer.trace(&tc)?;
     let trace_s = t.elapsed().as_secs_f64();
     let stored = out.photons.len();
-    let maps = base.build_maps(out.photons, out.frame);
+    let mut maps = base.build_maps(out.photons, out.frame);
+    let caustic_n = caustic.photons(tracer.scene(), n_max);
+    let (mut caustic_s, mut caustic_stored) = (0.0, 0);
+    if caustic_n > 0 {
+        let t = Instant::now();
+        let pass = tracer.trace_caustic(&tc, caustic_n)?;
+        caustic_stored = pass.report.stored;
+        let before = maps.build_caustic_s;
+        maps = maps.with_caustic_pass(pass);
+        // The pass's tree build is in `maps_s`.
+        caustic_s = t.elapsed().as_secs_f64() - (maps.build_caustic_s - before);
+    }
     let maps_s = maps.build_total_s();
     let mut measure = |spp: u32| -> Result<bool> {
         let mut c = base.clone();
@@ -418,16 +441,24 @@ fn photon_budget<C: RayCaster>(
         let row = PhotonRow {
             caustic_rel_rmse: judge.caustic_error(&img)?,
             photons: stored,
+            caustic_photons: caustic_n,
+            caustic_stored,
+            caustic_s,
             trace_s,
             maps_s,
             render_s,
             cache_build_s: stats.cache_build_s,
             lookup_s: stats.lookup_s,
-            total_s: trace_s + maps_s + render_s,
+            total_s: trace_s + caustic_s + maps_s + render_s,
             ..photon_row(&img, judge, n_max, spp)?
         };
         log(&format!(
-            "photon N_MAX {n_max}: {spp} spp, total {:.2} s (render {render_s:.2}), relRMSE {:.2} %{}, bias {:+.2} {:+.2} {:+.2} %",
+            "photon N_MAX {n_max}{}: {spp} spp, total {:.2} s (render {render_s:.2}), relRMSE {:.2} %{}, bias {:+.2} {:+.2} {:+.2} %",
+            if caustic_n > 0 {
+                format!(" + caustic {caustic_n} ({caustic_s:.2} s)")
+            } else {
+                String::new()
+            },
             row.total_s,
             100.0 * row.rel_rmse,
             row.caustic_rel_rmse
@@ -475,6 +506,9 @@ fn photon_row(img: &Image, judge: &Judge, n_max: u64, spp: u32) -> Result<Photon
     Ok(PhotonRow {
         n_max,
         photons: 0,
+        caustic_photons: 0,
+        caustic_stored: 0,
+        caustic_s: 0.0,
         trace_s: 0.0,
         maps_s: 0.0,
         spp,

@@ -38,7 +38,9 @@
 //!   towards them);
 //! - **caustics** at `x` (`L S+ x`, light that came through mirrors and
 //!   glass only): the radiance estimate of the **caustic map** (the photons
-//!   flagged caustic by the tracer) with its own, narrower kernel
+//!   flagged caustic by the tracer, or those of a caustic pass aimed at the
+//!   specular objects: [`crate::engine::Maps::with_caustic_pass`]) with its
+//!   own, narrower kernel
 //!   ([`RenderConfig::caustic_k`], [`RenderConfig::caustic_max_radius`]);
 //! - **the rest of the indirect light** at `x`, either
 //!   - without final gather: the radiance estimate of the photons stored at

@@ -4,7 +4,7 @@
 //! thread pool: only their ratios mean anything on a shared machine.
 
 use crate::cli::common::{open_scene, AssetRootArgs, EmbreeArgs, ThreadArgs};
-use adaptive_pm::engine::Mode;
+use adaptive_pm::engine::{CausticBudget, Mode};
 use adaptive_pm::experiments::render_study::{run_direct_study, run_study, StudyConfig};
 use adaptive_pm::render::RenderConfig;
 use serde_json::json;
@@ -32,6 +32,11 @@ pub struct RenderBenchArgs {
     /// Photon budgets (N_MAX), comma-separated.
     #[arg(long, default_value = "100000,300000,1000000", value_delimiter = ',')]
     pub n_max: Vec<u64>,
+    /// Caustic passes to try with each budget, comma-separated: `auto` (the
+    /// renderer's default, N_MAX caustic photons when the scene has mirrors
+    /// or glass), a photon count, 0 for none.
+    #[arg(long, default_value = "auto", value_delimiter = ',')]
+    pub caustic_photons: Vec<CausticBudget>,
     /// Largest spp of a photon render.
     #[arg(long, default_value_t = 512)]
     pub max_spp: u32,
@@ -74,6 +79,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
         reference_spp: args.reference_spp,
         path_spp: args.path_spp,
         n_max: args.n_max.clone(),
+        caustic: args.caustic_photons.clone(),
         max_spp: args.max_spp,
         target: args.target,
         mode: Mode::Adaptive,
