@@ -2,13 +2,14 @@
 //! (clustering + solid angles, one per sample set, as the estimator runs
 //! them) separately, the whole analysis of one function (`whole/`, what a
 //! scene pays per emitter or per BRDF incident angle), plus whole BRDF
-//! tables. Targets: one analysis < 1 ms, one table < 20 ms, on one core.
+//! tables, rough glass included. Targets: one analysis < 1 ms, one table
+//! < 20 ms, on one core.
 
 use adaptive_pm::analysis::sampling::{sample, Placement, Target};
 use adaptive_pm::analysis::{
     analyze_brdf, analyze_brdf_at, analyze_emitter, find_peaks, AnalysisParams, Estimator,
 };
-use adaptive_pm::brdf::{Brdf, CookTorrance, GltfPbr, Phong};
+use adaptive_pm::brdf::{Brdf, CookTorrance, GltfPbr, Phong, RoughDielectric};
 use adaptive_pm::emitter::CosN;
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
@@ -20,6 +21,7 @@ fn functions() -> Vec<Named> {
     let ct = |m| CookTorrance::new(m, Vec3::splat(0.9), Vec3::ZERO).unwrap();
     let gltf = |r: f32| GltfPbr::new(Vec3::splat(0.9), 1.0, r * r, 0.04).unwrap();
     let plastic = GltfPbr::new(Vec3::new(0.8, 0.3, 0.2), 0.0, 0.25, 0.04).unwrap();
+    let glass = |alpha| RoughDielectric::new(alpha, 1.5, Vec3::ONE, Vec3::ZERO, false).unwrap();
     vec![
         ("cosn10", None, 10.0),
         ("cosn100", None, 100.0),
@@ -28,6 +30,10 @@ fn functions() -> Vec<Named> {
         ("ct0.05", Some(ct(0.05).into()), 0.0),
         ("gltf-metal0.3", Some(gltf(0.3).into()), 0.0),
         ("gltf-plastic0.5", Some(plastic.into()), 0.0),
+        // Rough glass: the analysis over the whole sphere (reflection and
+        // transmission).
+        ("rough-glass0.3", Some(glass(0.09).into()), 0.0),
+        ("rough-glass0.05", Some(glass(0.0025).into()), 0.0),
     ]
 }
 
