@@ -9,7 +9,7 @@
 //! tangent's handedness. Tangents come from the mesh's `TANGENT` attribute
 //! ([`Scene::set_vertex_tangents`]) or, as glTF asks when it is absent,
 //! from the MikkTSpace algorithm over the positions, normals and the
-//! normal texture's coordinates ([`Scene::generate_tangents`], by the
+//! normal texture's coordinates (`Scene::generate_tangents`, feature `gltf`, by the
 //! `bevy_mikktspace` crate). They are kept per triangle corner, since
 //! MikkTSpace may give one shared vertex different tangents in two faces.
 //!
@@ -116,13 +116,14 @@ impl Scene {
         Ok(())
     }
 
-    /// Computes mesh `mesh`'s tangents by MikkTSpace from its positions, its
+    /// Computes mesh `mesh`'s tangents by MikkTSpace (feature `gltf`) from its positions, its
     /// normals (the winding normals on a flat mesh) and its texture
     /// coordinates `TEXCOORD_set`.
     ///
     /// # Errors
     /// [`Error::InvalidScene`] for an unknown mesh, a mesh without that set,
     /// or coordinates from which MikkTSpace finds no tangent at all.
+    #[cfg(feature = "gltf")]
     pub fn generate_tangents(&mut self, mesh: usize, set: usize) -> Result<()> {
         let Some(m) = self.meshes.get_mut(mesh) else {
             return Err(Error::InvalidScene(format!(
@@ -156,6 +157,7 @@ impl Scene {
 }
 
 /// A mesh seen by MikkTSpace: one face per triangle.
+#[cfg(feature = "gltf")]
 struct Mikk<'a> {
     mesh: &'a Mesh,
     set: usize,
@@ -164,12 +166,14 @@ struct Mikk<'a> {
     out: Vec<[Vec4; 3]>,
 }
 
+#[cfg(feature = "gltf")]
 impl Mikk<'_> {
     fn vertex(&self, face: usize, vert: usize) -> usize {
         self.mesh.indices[face][vert] as usize
     }
 }
 
+#[cfg(feature = "gltf")]
 impl bevy_mikktspace::Geometry for Mikk<'_> {
     fn num_faces(&self) -> usize {
         self.mesh.indices.len()
