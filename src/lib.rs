@@ -136,6 +136,7 @@ pub mod embree;
 pub mod emitter;
 pub mod engine;
 pub mod error;
+pub mod importance;
 pub mod input;
 pub mod isa;
 // The paper's experiments drive the command line; they are not a stable API.

@@ -76,20 +76,20 @@ impl SampleScratch {
 }
 
 /// A non-delta hit reached through zero or more mirrors.
-struct SurfaceHit {
-    position: Vec3,
+pub(super) struct SurfaceHit {
+    pub(super) position: Vec3,
     /// Geometric normal flipped to the side the ray came from.
-    normal: Vec3,
+    pub(super) normal: Vec3,
     /// Shading normal (interpolated vertex normals when the mesh has them),
     /// on the same side as `normal`.
-    shading: Vec3,
+    pub(super) shading: Vec3,
     /// Unit direction back along the ray.
-    wo: Vec3,
+    pub(super) wo: Vec3,
     material_index: usize,
     /// The BRDF at this point (a textured material's, from its texels).
-    brdf: Brdf,
+    pub(super) brdf: Brdf,
     /// Product of the mirror weights on the way.
-    throughput: Vec3,
+    pub(super) throughput: Vec3,
 }
 
 impl<'a> Ctx<'a> {
@@ -105,7 +105,7 @@ impl<'a> Ctx<'a> {
     /// hit (camera paths carry radiance: [`Transport::Radiance`]). Emission
     /// seen at hit `first_emission` (0 = the first hit) and later is added
     /// to `emitted`.
-    fn trace(
+    pub(super) fn trace(
         &self,
         mut ray: Ray,
         first_emission: u32,
@@ -231,28 +231,35 @@ impl<'a> Ctx<'a> {
         rng: &mut Rng,
         sc: &mut SampleScratch,
     ) -> Vec3 {
-        let frame = Frame::from_normal(s.shading);
-        let wo_l = frame.local_from_world(s.wo);
         let mut sum = Vec3::ZERO;
         let n = self.spp * self.gather;
         for j in 0..self.gather {
             let u = px.get_2d(dim::GATHER, sample * self.gather + j, n);
-            let Some(bs) = s.brdf.sample(wo_l, u) else {
+            let Some((weight, ray)) = self.gather_ray(s, u) else {
                 continue;
             };
-            let dir = frame.world_from_local(bs.wo);
-            if dir.dot(s.normal) <= 0.0 {
-                continue;
-            }
-            let ray = Ray::new(s.position + s.normal * self.eps, dir);
             // Emission straight from a light was counted by light sampling,
             // and through mirrors and glass by the caustic map.
             let mut emitted = Vec3::ZERO;
             if let Some(y) = self.trace(ray, u32::MAX, rng, &mut emitted) {
-                sum += bs.weight * y.throughput * self.cached_radiance(maps, &y, rng, sc);
+                sum += weight * y.throughput * self.cached_radiance(maps, &y, rng, sc);
             }
         }
         sum / self.gather as f32
+    }
+
+    /// A BRDF-sampled ray leaving `s` from the point `u` in `[0, 1)^2`, and
+    /// its weight (BRDF times cosine over pdf): the gather's sampling, also
+    /// the importance pass's ([`super::importance_walk`]). `None` for no
+    /// sample or one below the surface.
+    pub(super) fn gather_ray(&self, s: &SurfaceHit, u: [f32; 2]) -> Option<(Vec3, Ray)> {
+        let frame = Frame::from_normal(s.shading);
+        let bs = s.brdf.sample(frame.local_from_world(s.wo), u)?;
+        let dir = frame.world_from_local(bs.wo);
+        if dir.dot(s.normal) <= 0.0 {
+            return None;
+        }
+        Some((bs.weight, Ray::new(s.position + s.normal * self.eps, dir)))
     }
 
     /// Direct light at `s`: `light_samples` stratified light samples.

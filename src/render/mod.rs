@@ -90,6 +90,7 @@ pub mod direct;
 pub mod estimate;
 mod film;
 pub mod image;
+pub(crate) mod importance_walk;
 mod integrator;
 pub mod metrics;
 pub mod path;

@@ -146,7 +146,7 @@ pub struct IrradianceCache {
 }
 
 /// Bucket of a unit normal: dominant axis and sign (0..6).
-fn bucket(n: Vec3) -> u64 {
+pub(crate) fn bucket(n: Vec3) -> u64 {
     let a = n.abs();
     let (axis, v) = if a.x >= a.y && a.x >= a.z {
         (0, n.x)

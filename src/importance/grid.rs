@@ -1,0 +1,412 @@
+//! The importance pass's hashed grid: exact fixed-point sums while the pass
+//! runs and when shards merge ([`ImportanceSums`]), frozen into an 8-byte
+//! slot table for O(1) lookups ([`ImportanceGrid`]). See the module docs
+//! of [`super`] for the cell rule and the slot layout.
+
+use crate::error::{Error, Result};
+use crate::render::cache::bucket;
+use crate::rng::mix64;
+use glam::Vec3;
+use std::collections::HashMap;
+
+/// One unit of throughput in the fixed-point sums: 2^24, so a deposit is
+/// kept to 6e-8 of a camera sample's throughput.
+pub const FIXED_ONE: f64 = 16_777_216.0;
+/// The largest deposit counted, in throughput units (a glossy weight or a
+/// grazing glass path can exceed 1; far above is a numerical accident): a
+/// cell overflows its u64 only after 2^24 such deposits.
+pub const MAX_DEPOSIT: f64 = 65_536.0;
+/// The readers kept apart in the sums: first hits, gather hits, later
+/// bounces ([`Reader`](crate::render::importance_walk::Reader)'s order).
+pub const READERS: usize = 3;
+
+/// Bits of a cell coordinate in a key: coordinates wrap every 2^19 cells
+/// per axis, far beyond the 1/fraction cells a scene's diagonal spans.
+const COORD_BITS: u32 = 19;
+const COORD_MASK: u64 = (1 << COORD_BITS) - 1;
+
+/// A throughput as a fixed-point deposit (0 for NaN, negative or zero).
+pub(crate) fn to_fixed(w: f32) -> u64 {
+    let w = f64::from(w);
+    if w > 0.0 {
+        (w.min(MAX_DEPOSIT) * FIXED_ONE).round() as u64
+    } else {
+        0
+    }
+}
+
+/// Where cells are: cubes of side `cell` from `origin`, each split into six
+/// buckets by the dominant axis and sign of the normal on the side the ray
+/// arrived from (a wall's two faces, and a floor and a wall meeting in one
+/// cube, are different cells).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellGrid {
+    origin: Vec3,
+    cell: f32,
+}
+
+impl CellGrid {
+    /// Cells of side `fraction` times the diagonal of the box `lo..hi`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a fraction outside `(0, 1]`, or a
+    /// box whose diagonal is not a positive finite number.
+    pub fn for_bounds(lo: Vec3, hi: Vec3, fraction: f32) -> Result<Self> {
+        if !(fraction > 0.0 && fraction <= 1.0) {
+            return Err(Error::param(
+                "importance cell",
+                format!("the cell fraction of the diagonal must be in (0, 1], got {fraction}"),
+            ));
+        }
+        let diagonal = (hi - lo).length();
+        if !(diagonal.is_finite() && diagonal > 0.0) {
+            return Err(Error::param(
+                "importance cell",
+                "the scene's bounds have no positive finite diagonal",
+            ));
+        }
+        Ok(CellGrid {
+            origin: lo,
+            cell: diagonal * fraction,
+        })
+    }
+
+    /// The side of a cell (world units).
+    pub fn cell_size(&self) -> f32 {
+        self.cell
+    }
+
+    /// The key of the cell of point `x` seen from the side of unit normal
+    /// `n`: three wrapped coordinates and the normal's bucket, packed.
+    pub fn key(&self, x: Vec3, n: Vec3) -> u64 {
+        let g = ((x - self.origin) / self.cell).floor();
+        let c = |v: f32| (v.clamp(-1e15, 1e15) as i64 as u64) & COORD_MASK;
+        c(g.x) | (c(g.y) << COORD_BITS) | (c(g.z) << (2 * COORD_BITS)) | (bucket(n) << 57)
+    }
+
+    /// The 26 cells around `key`'s, in its bucket.
+    fn neighbours(key: u64) -> impl Iterator<Item = u64> {
+        let field = |i: u32| (key >> (i * COORD_BITS)) & COORD_MASK;
+        let (x, y, z, b) = (field(0), field(1), field(2), key >> 57);
+        let step = |v: u64, d: i64| (v as i64 + d) as u64 & COORD_MASK;
+        (0..27).filter(|&i| i != 13).map(move |i| {
+            let (dx, dy, dz) = (i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1);
+            step(x, dx)
+                | (step(y, dy) << COORD_BITS)
+                | (step(z, dz) << (2 * COORD_BITS))
+                | (b << 57)
+        })
+    }
+}
+
+/// Per-cell fixed-point sums of a pass or a shard of it, sorted by key.
+/// Integer sums do not depend on the order of the deposits: merging the
+/// shards of a pass gives bitwise the whole pass's sums.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportanceSums {
+    pub(crate) grid: CellGrid,
+    /// Camera samples of the whole pass (every shard's), the sums' divisor.
+    pub(crate) samples: u64,
+    pub(crate) cells: Vec<(u64, [u64; READERS])>,
+}
+
+/// Deposits of part of a pass, in any order.
+#[derive(Default)]
+pub(crate) struct Accumulator {
+    map: HashMap<u64, [u64; READERS]>,
+}
+
+impl Accumulator {
+    pub(crate) fn add(&mut self, key: u64, reader: usize, fixed: u64) {
+        if fixed > 0 {
+            let c = self.map.entry(key).or_default();
+            c[reader] = c[reader].saturating_add(fixed);
+        }
+    }
+
+    /// Both parts' deposits (saturating sums of non-negative terms: the
+    /// same whatever the order).
+    pub(crate) fn merge(mut self, other: Accumulator) -> Accumulator {
+        let (mut big, small) = if self.map.len() >= other.map.len() {
+            (std::mem::take(&mut self.map), other.map)
+        } else {
+            (other.map, std::mem::take(&mut self.map))
+        };
+        for (k, v) in small {
+            let c = big.entry(k).or_default();
+            for r in 0..READERS {
+                c[r] = c[r].saturating_add(v[r]);
+            }
+        }
+        Accumulator { map: big }
+    }
+
+    pub(crate) fn into_sums(self, grid: CellGrid, samples: u64) -> ImportanceSums {
+        let mut cells: Vec<_> = self.map.into_iter().collect();
+        cells.sort_unstable_by_key(|&(k, _)| k);
+        ImportanceSums {
+            grid,
+            samples,
+            cells,
+        }
+    }
+}
+
+impl ImportanceSums {
+    /// The sums of the shards of one pass, merged: bitwise the whole pass's.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for no part, or parts of passes with
+    /// other cells or sample counts.
+    pub fn merge(parts: &[ImportanceSums]) -> Result<Self> {
+        let first = parts
+            .first()
+            .ok_or_else(|| Error::param("importance", "nothing to merge"))?;
+        let mut acc = Accumulator::default();
+        for p in parts {
+            if p.grid != first.grid || p.samples != first.samples {
+                return Err(Error::param(
+                    "importance",
+                    "the parts come from passes with other cells or sample counts",
+                ));
+            }
+            let mut part = Accumulator::default();
+            for &(k, v) in &p.cells {
+                for (r, &f) in v.iter().enumerate() {
+                    part.add(k, r, f);
+                }
+            }
+            acc = acc.merge(part);
+        }
+        Ok(acc.into_sums(first.grid, first.samples))
+    }
+
+    /// The cells' geometry.
+    pub fn grid(&self) -> CellGrid {
+        self.grid
+    }
+
+    /// Camera samples of the whole pass.
+    pub fn samples(&self) -> u64 {
+        self.samples
+    }
+
+    /// The cells, sorted by key: each key and its fixed-point sums by reader.
+    pub fn cells(&self) -> &[(u64, [u64; READERS])] {
+        &self.cells
+    }
+
+    /// The throughput reader `reader` received over all cells, per camera
+    /// sample (the first hits': the share of samples that hit a surface).
+    pub fn total_per_sample(&self, reader: usize) -> f64 {
+        let sum: u128 = self.cells.iter().map(|c| u128::from(c.1[reader])).sum();
+        sum as f64 / FIXED_ONE / self.samples.max(1) as f64
+    }
+
+    /// Importance per unit area and camera sample of a cell's sums for
+    /// reader `reader`: its throughput over the samples and `cell^2` (the
+    /// area a flat surface along a grid plane has in a cell).
+    pub fn density(&self, sums: &[u64; READERS], reader: usize) -> f64 {
+        let h = f64::from(self.grid.cell);
+        sums[reader] as f64 / FIXED_ONE / (self.samples.max(1) as f64 * h * h)
+    }
+
+    /// The lookup table of these sums.
+    pub fn freeze(&self) -> ImportanceGrid {
+        ImportanceGrid::from_sums(self)
+    }
+}
+
+/// One slot: a tag of the cell's key (0 = empty), the read importance
+/// (bf16; its sign bit marks a cell next to a read one) and the adjoint
+/// (bf16).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Slot {
+    tag: u32,
+    read: u16,
+    adjoint: u16,
+}
+
+const NEAR_READ: u16 = 0x8000;
+
+/// f32 to bfloat16, rounded to nearest even (positive finite values stay
+/// positive).
+fn to_bf16(v: f32) -> u16 {
+    let b = v.max(0.0).to_bits();
+    let rounded = b.saturating_add(0x7FFF + ((b >> 16) & 1));
+    ((rounded >> 16) as u16).max(u16::from(b > 0))
+}
+
+fn from_bf16(v: u16) -> f32 {
+    f32::from_bits(u32::from(v & !NEAR_READ) << 16)
+}
+
+/// Importance per unit area in the cells of a hashed grid, one probe per
+/// lookup (module docs of [`super`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportanceGrid {
+    slots: Vec<Slot>,
+    grid: CellGrid,
+    cells: usize,
+    adjoint_ref: f32,
+}
+
+impl ImportanceGrid {
+    fn from_sums(sums: &ImportanceSums) -> Self {
+        // read = first + gather, adjoint = all three; a read cell's
+        // neighbours are kept too, flagged, so that photons next to what is
+        // read are stored (a kernel reaches past its cell).
+        let mut values: HashMap<u64, (f32, f32, bool)> = HashMap::new();
+        let (mut adjoint_sum, mut read_cells) = (0.0f64, 0u64);
+        for (k, s) in &sums.cells {
+            let read = sums.density(s, 0) + sums.density(s, 1);
+            let adjoint = read + sums.density(s, 2);
+            if read > 0.0 {
+                adjoint_sum += adjoint;
+                read_cells += 1;
+            }
+            let e = values.entry(*k).or_insert((0.0, 0.0, false));
+            (e.0, e.1) = (read as f32, adjoint as f32);
+        }
+        for (k, s) in &sums.cells {
+            if s[0] > 0 || s[1] > 0 {
+                for n in CellGrid::neighbours(*k) {
+                    values.entry(n).or_insert((0.0, 0.0, false)).2 = true;
+                }
+            }
+        }
+        let mut keys: Vec<u64> = values.keys().copied().collect();
+        keys.sort_unstable();
+        let mut grid = ImportanceGrid {
+            slots: vec![Slot::default(); (2 * keys.len()).max(1)],
+            grid: sums.grid,
+            cells: keys.len(),
+            adjoint_ref: (adjoint_sum / read_cells.max(1) as f64) as f32,
+        };
+        for k in keys {
+            let (read, adjoint, near) = values[&k];
+            let read = to_bf16(read) | if near || read > 0.0 { NEAR_READ } else { 0 };
+            grid.insert(k, read, to_bf16(adjoint));
+        }
+        grid
+    }
+
+    fn home(&self, hash: u64) -> usize {
+        ((hash as u32 as u64 * self.slots.len() as u64) >> 32) as usize
+    }
+
+    fn insert(&mut self, key: u64, read: u16, adjoint: u16) {
+        let hash = mix64(key);
+        let tag = (hash >> 32) as u32 | 1;
+        let mut i = self.home(hash);
+        while self.slots[i].tag != 0 {
+            i = if i + 1 == self.slots.len() { 0 } else { i + 1 };
+        }
+        self.slots[i] = Slot { tag, read, adjoint };
+    }
+
+    fn probe(&self, x: Vec3, n: Vec3) -> Slot {
+        let hash = mix64(self.grid.key(x, n));
+        let tag = (hash >> 32) as u32 | 1;
+        let mut i = self.home(hash);
+        loop {
+            match self.slots.get(i) {
+                Some(s) if s.tag == tag => return *s,
+                Some(s) if s.tag != 0 => {}
+                _ => return Slot::default(),
+            }
+            i = if i + 1 == self.slots.len() { 0 } else { i + 1 };
+        }
+    }
+
+    /// Importance per unit area and camera sample where the render reads
+    /// photons (first and gather hits) at `x`, seen from the side of `n`.
+    pub fn read(&self, x: Vec3, n: Vec3) -> f32 {
+        from_bf16(self.probe(x, n).read)
+    }
+
+    /// True when a read cell is at `x` or next to it: photons there may be
+    /// read by a kernel.
+    pub fn near_read(&self, x: Vec3, n: Vec3) -> bool {
+        self.probe(x, n).read & NEAR_READ != 0
+    }
+
+    /// The adjoint estimate at `x` (side of `n`): the importance of what
+    /// is read there plus what camera paths bring there from later bounces.
+    pub fn adjoint(&self, x: Vec3, n: Vec3) -> f32 {
+        from_bf16(self.probe(x, n).adjoint)
+    }
+
+    /// The mean adjoint over the read cells: the reference alpha_I divides by.
+    pub fn adjoint_reference(&self) -> f32 {
+        self.adjoint_ref
+    }
+
+    /// Cells in the table (read cells, cells with an adjoint, and their
+    /// flagged neighbours).
+    pub fn len(&self) -> usize {
+        self.cells
+    }
+
+    /// True when no cell holds anything.
+    pub fn is_empty(&self) -> bool {
+        self.cells == 0
+    }
+
+    /// The cells' geometry.
+    pub fn grid(&self) -> CellGrid {
+        self.grid
+    }
+
+    /// Bytes of the table per cell: 8-byte slots, half full, so 16.
+    pub fn bytes_per_cell(&self) -> usize {
+        (self.slots.len() * std::mem::size_of::<Slot>()).div_ceil(self.cells.max(1))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bf16_keeps_two_significant_digits_and_zero() {
+        for v in [1.0f32, 3.7e-5, 12345.0, 1e-30] {
+            let back = from_bf16(to_bf16(v));
+            assert!((back - v).abs() <= v / 256.0, "{v} -> {back}");
+        }
+        assert_eq!(from_bf16(to_bf16(0.0)), 0.0);
+        assert_eq!(from_bf16(to_bf16(-1.0)), 0.0);
+    }
+
+    #[test]
+    fn neighbours_are_the_26_around_in_the_bucket() {
+        let g = CellGrid::for_bounds(Vec3::ZERO, Vec3::ONE, 0.1).unwrap();
+        let key = g.key(Vec3::splat(0.05), Vec3::Y);
+        let mut n: Vec<u64> = CellGrid::neighbours(key).collect();
+        n.sort_unstable();
+        n.dedup();
+        assert_eq!(n.len(), 26);
+        assert!(!n.contains(&key));
+        let h = g.cell_size();
+        assert!(n.contains(&g.key(Vec3::splat(0.05) + Vec3::new(h, -h, 0.0), Vec3::Y)));
+        assert!(!n.contains(&g.key(Vec3::splat(0.05) + Vec3::X * h, -Vec3::Y)));
+    }
+
+    #[test]
+    fn a_frozen_cell_reads_back_its_density() {
+        let g = CellGrid::for_bounds(Vec3::ZERO, Vec3::ONE, 0.25).unwrap();
+        let mut acc = Accumulator::default();
+        let x = Vec3::new(0.1, 0.5, 0.1);
+        acc.add(g.key(x, Vec3::Y), 0, to_fixed(2.0));
+        acc.add(g.key(x, Vec3::Y), 2, to_fixed(1.0));
+        let grid = acc.into_sums(g, 4).freeze();
+        let h = g.cell_size();
+        let want = 2.0 / (4.0 * h * h);
+        assert!((grid.read(x, Vec3::Y) / want - 1.0).abs() < 1.0 / 128.0);
+        assert!((grid.adjoint(x, Vec3::Y) / (1.5 * want) - 1.0).abs() < 1.0 / 128.0);
+        assert_eq!(grid.read(x, -Vec3::Y), 0.0);
+        assert!(grid.near_read(x + Vec3::X * h, Vec3::Y));
+        assert!(!grid.near_read(x + Vec3::X * 2.0 * h, Vec3::Y));
+        assert!(grid.bytes_per_cell() <= 16);
+    }
+}

@@ -1,0 +1,128 @@
+//! Visual importance over the scene's surfaces, from the camera (beyond the
+//! paper; docs/method.md, "The importance pass").
+//!
+//! The adaptive counts see the lights and the BRDFs but not the camera: a
+//! photon is split as readily where no pixel reads it as in the middle of
+//! the image. Before the photons, this pass traces importance from the
+//! camera, as Peter and Pietrek's importance map does ("Importance driven
+//! construction of photon maps", EGWR 1998), with the renderer's own
+//! estimator ([`crate::render`]'s camera rays, pixel sampler and gather),
+//! so that the map says where *this* render reads photons.
+//!
+//! # What is deposited
+//! Each camera sample (pixel `p`, sample `s`: the film's keys, so the walk
+//! is the render's own) deposits the luminance of its path throughput `T`
+//! at three kinds of point, kept apart:
+//! - **first**: the camera ray's first non-specular hit, through mirrors and
+//!   glass (`T` = the specular weights); the caustic map, and the indirect
+//!   map without a gather, are read there;
+//! - **gather**: the hits of the gather's `G` BRDF-sampled rays
+//!   (`T = T_x f cos / pdf T_y / G`), where the cache or full map is read;
+//! - **later**: [`ImportanceConfig::later_bounces`] further BRDF-sampled
+//!   bounces from each gather hit. Nothing reads photons there; the
+//!   deposits estimate the *adjoint*, what a photon there brings to the
+//!   image through its later bounces (the estimate ADRRS, Vorba and
+//!   Křivánek 2016, and EARS, Rath et al. 2022, drive splitting with).
+//!
+//! A cell's value is its deposits over the pass's camera samples and the
+//! cell's face area `h^2`: importance per unit area and camera sample, a
+//! density over the surfaces. For a camera facing a plane, the first-hit
+//! density is 1 over the plane's area in view.
+//!
+//! # Cells
+//! Cubes of side `h = cell_fraction * diagonal` of the scene's bounds
+//! (default [`DEFAULT_CELL_FRACTION`] = 1/64: about 4000 cells over a box's
+//! six walls, a few camera samples each at the default 128 x 128 x 4),
+//! split six ways by the dominant axis and sign of the normal on the side
+//! the ray arrived from, so the two faces of a wall, or a floor and a wall
+//! in one cube, are different cells. A key packs the three cell
+//! coordinates (19 bits each, wrapping) and the bucket.
+//!
+//! # Determinism and shards
+//! Deposits are fixed-point integers (2^24 per unit of throughput) summed
+//! per cell ([`ImportanceSums`]): integer sums do not depend on the order,
+//! so the sums are bitwise the same whatever the thread count. Shard `I` of
+//! `N` walks the camera samples `[floor(n I / N), floor(n (I + 1) / N))` of
+//! the pass's `n`, as a trace's shard takes its photons ([`Shard`]), and
+//! [`ImportanceSums::merge`] of the shards' sums is bitwise the whole pass's.
+//!
+//! # The lookup table ([`ImportanceGrid`])
+//! Frozen from the sums: open addressing with linear probing, a table of
+//! twice as many slots as cells (half full), **16 bytes per cell**. A slot
+//! is 8 bytes:
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 0-3 | tag: the high 32 bits of the key's hash, low bit set (0 = empty) |
+//! | 4-5 | read importance (first + gather), bfloat16; its sign bit flags a cell that is read or next to one |
+//! | 6-7 | adjoint (first + gather + later), bfloat16 |
+//!
+//! One probe per lookup ([`ImportanceGrid::read`], [`ImportanceGrid::adjoint`],
+//! [`ImportanceGrid::near_read`]); a tag collision, odds about cells / 2^32
+//! per lookup, reads a wrong cell. The 26 neighbours of a read cell are kept
+//! with the flag set: a kernel reaches past its cell, so photons next to a
+//! read cell may be read.
+
+use crate::engine::Shard;
+use crate::scene::Camera;
+
+mod grid;
+mod pass;
+
+pub use grid::{CellGrid, ImportanceGrid, ImportanceSums, FIXED_ONE, MAX_DEPOSIT, READERS};
+pub use pass::{importance_pass, MAX_LATER_BOUNCES};
+
+/// Default cell side as a fraction of the scene's bounding-box diagonal.
+pub const DEFAULT_CELL_FRACTION: f32 = 1.0 / 64.0;
+
+/// Index of the first-hit reader in [`ImportanceSums::cells`].
+pub const FIRST: usize = 0;
+/// Index of the gather reader.
+pub const GATHER: usize = 1;
+/// Index of the later bounces (the adjoint's remainder).
+pub const LATER: usize = 2;
+
+/// How to run the importance pass: the render it stands for (image size,
+/// samples, gather rays, seed, camera), how far the adjoint looks, the
+/// cells, and which camera samples this run walks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImportanceConfig {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Camera samples per pixel.
+    pub spp: u32,
+    /// Gather rays per camera sample (0: the render reads the map at the
+    /// first hit, and there are no gather or later deposits).
+    pub gather: u32,
+    /// BRDF-sampled bounces after each gather hit (the adjoint's reach).
+    pub later_bounces: u32,
+    /// Seed of the camera samples (the render's seed walks its own samples).
+    pub seed: u64,
+    /// The camera; `None` is the scene's.
+    pub camera: Option<Camera>,
+    /// Cell side over the scene's diagonal, in `(0, 1]`.
+    pub cell_fraction: f32,
+    /// Which camera samples to walk (the whole pass by default).
+    pub shard: Shard,
+}
+
+impl Default for ImportanceConfig {
+    /// 128 x 128 pixels at 4 samples, one gather ray (the render's
+    /// default), 4 later bounces, cells of 1/64 of the diagonal, the
+    /// scene's camera.
+    fn default() -> Self {
+        ImportanceConfig {
+            width: 128,
+            height: 128,
+            spp: 4,
+            gather: crate::render::DEFAULT_GATHER,
+            later_bounces: 4,
+            seed: 1,
+            camera: None,
+            cell_fraction: DEFAULT_CELL_FRACTION,
+            shard: Shard::WHOLE,
+        }
+    }
+}
