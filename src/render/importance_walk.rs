@@ -156,7 +156,8 @@ impl<'a> CameraWalk<'a> {
                 return;
             };
             t *= weight * z.throughput;
-            if !(t.max_element() > 0.0) {
+            let alive = t.max_element() > 0.0; // false for NaN too
+            if !alive {
                 return;
             }
             deposit(Reader::Later, &Hit::of(&z), lum(t));
