@@ -244,6 +244,7 @@ impl<C: RayCaster> Tracer<C> {
                 frame: Quantizer::new(glam::Vec3::ZERO, glam::Vec3::ONE, 1.0),
                 epsilon: scene.ray_epsilon(),
                 depth: depth as u8,
+                importance: None,
             };
             let outs = trace_wave(&ctx, &wave, &mut Vec::new(), cfg.batch(), true);
             if let Some(bad) = outs.iter().find_map(|o| o.bad_hit) {

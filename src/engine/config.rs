@@ -148,6 +148,10 @@ pub struct TraceConfig {
     pub batch: usize,
     /// Which emitted photons to trace (the whole run by default).
     pub shard: Shard,
+    /// Importance from the camera in the counts (adaptive mode only, beyond
+    /// the paper; docs/method.md, "Importance in the counts"): the pass to
+    /// run first. `None`, the default, is the paper's counts.
+    pub importance: Option<crate::importance::ImportanceConfig>,
 }
 
 impl Default for TraceConfig {
@@ -173,6 +177,7 @@ impl TraceConfig {
             density_target: DensityTarget::Auto,
             batch: 1024,
             shard: Shard::WHOLE,
+            importance: None,
         }
     }
 
@@ -211,6 +216,9 @@ impl TraceConfig {
         if self.batch == 0 {
             return Err(Error::param("batch", "must be at least 1"));
         }
+        if let Some(imp) = &self.importance {
+            check_importance(self.mode, imp)?;
+        }
         self.analysis.validate()?;
         Ok(CheckedConfig {
             raw: self.clone(),
@@ -228,6 +236,25 @@ impl TraceConfig {
     pub fn validate(&self) -> Result<()> {
         self.check().map(|_| ())
     }
+}
+
+/// Importance is an option of the adaptive counts, and its pass is the
+/// whole pass in every photon shard (so that shards split the same way and
+/// merge into the whole run).
+fn check_importance(mode: Mode, imp: &crate::importance::ImportanceConfig) -> Result<()> {
+    if mode != Mode::Adaptive {
+        return Err(Error::param(
+            "importance",
+            format!("importance in the counts is an option of the adaptive mode, not {mode}"),
+        ));
+    }
+    if !imp.shard.is_whole() {
+        return Err(Error::param(
+            "importance",
+            "a trace runs the whole importance pass: its shard must be 0/1",
+        ));
+    }
+    imp.validate()
 }
 
 /// A [`TraceConfig`] whose every invariant holds (the high-level form of the

@@ -39,6 +39,6 @@ pub use caustic::{default_caustic_photons, CausticBudget, CausticOutput, Caustic
 pub use caustic_aim::CausticAim;
 pub use config::{Budget, CheckedConfig, DensityTarget, Mode, TraceConfig, PAPER_N_MAX};
 pub use measure::{density_points, map_density, map_metrics, primary_density, MapMetrics, Maps};
-pub use report::{DepthStats, TraceReport};
+pub use report::{DepthStats, ImportanceReport, TraceReport};
 pub use shard::Shard;
 pub use tracer::{TraceOutput, TraceProgress, Tracer};

@@ -72,6 +72,23 @@ pub struct TraceReport {
     pub kernels: Option<crate::isa::Kernels>,
     /// The C maths library's variant on the tracing host.
     pub math: Option<crate::isa::MathVariant>,
+    /// What importance in the counts did (`None` without it: the paper's
+    /// runs report exactly what they did before).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub importance: Option<ImportanceReport>,
+}
+
+/// The importance pass and its effect on a run.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ImportanceReport {
+    /// Seconds of the importance pass (camera walk and freezing the grid).
+    pub pass_s: f64,
+    /// Cells of the frozen grid.
+    pub cells: usize,
+    /// Each light's emission alpha_I (from its pilot photons).
+    pub emission_alpha_i: Vec<f32>,
+    /// Photons not stored because nothing reads them where they landed.
+    pub unread: u64,
 }
 
 impl TraceReport {
@@ -103,6 +120,7 @@ impl TraceReport {
             trace_primary_s: 0.0,
             kernels,
             math: crate::isa::MathVariant::host(),
+            importance: None,
         }
     }
 

@@ -11,6 +11,7 @@ use super::stream::Schedule;
 use super::wave::{BatchOut, PathState, ShadeContext};
 use crate::analysis::{AnalysisCache, DirectionalityTable};
 use crate::error::{Error, Result};
+use crate::importance::ImportanceCounts;
 use crate::photon_map::{CompactPhoton, PhotonMap, PhotonRecord, Quantizer};
 use crate::raycast::RayCaster;
 use crate::sampling::luminance;
@@ -228,7 +229,16 @@ impl<C: RayCaster> Tracer<C> {
     ) -> Result<TraceOutput> {
         // Checked once, when it was prepared.
         let scene = self.prepared.scene();
-        let (plans, tables) = self.analyse(cfg)?;
+        let (mut plans, tables) = self.analyse(cfg)?;
+        let importance = match &cfg.settings().importance {
+            Some(ic) => Some(crate::importance::counts::prepare(
+                &self.prepared,
+                ic,
+                cfg.seed(),
+                &mut plans,
+            )?),
+            None => None,
+        };
         let n_max = cfg.n_max();
         let shard = cfg.settings().shard;
         let emitted = emitted_within_budget(&plans, cfg)?;
@@ -248,6 +258,7 @@ impl<C: RayCaster> Tracer<C> {
 
         let kernels = self.prepared.caster().kernels();
         let mut report = TraceReport::new(cfg.mode(), n_max, &plans, kernels);
+        report.importance = importance.as_ref().map(|(_, r)| r.clone());
         let frame = map_frame(scene, &plans);
         let start = Instant::now();
         let mut density = density_control(scene, cfg, emitted, &frame)?;
@@ -310,6 +321,7 @@ impl<C: RayCaster> Tracer<C> {
                 frame,
                 epsilon,
                 depth: depth as u8,
+                importance: importance.as_ref().map(|(g, _)| ImportanceCounts::new(g)),
             };
             let outs = trace_wave(&ctx, &wave, &mut photons, cfg.batch(), density.is_some());
             absorb_wave(scene, outs, depth, &mut report, &mut density, &mut schedule)?;
@@ -410,17 +422,22 @@ fn absorb_wave(
     if let Some(bad) = outs.iter().find_map(|o| o.bad_hit) {
         return Err(bad.into_error(scene));
     }
+    let mut report_importance = report.importance.take();
     let stats = report.depth_mut(depth);
     for out in outs {
         stats.hits += out.hits;
         stats.escaped += out.escaped;
         stats.capped += out.capped;
+        if let Some(imp) = report_importance.as_mut() {
+            imp.unread += out.unread;
+        }
         stats.children += out.children.len() as u64;
         if let Some(dc) = density {
             dc.offer(&out.records, &out.normals);
         }
         schedule.pending[depth + 1].push_chunk(out.children);
     }
+    report.importance = report_importance;
     Ok(())
 }
 

@@ -12,6 +12,7 @@
 use super::albedo::AlbedoTable;
 use super::counts::{expected_children, round_stochastic};
 use crate::analysis::DirectionalityTable;
+use crate::importance::ImportanceCounts;
 use crate::photon_map::{CompactPhoton, PhotonRecord, Quantizer};
 use crate::raycast::{BadHit, Hit, Ray, RayCaster};
 use crate::rng::{hash2, Rng};
@@ -67,6 +68,8 @@ pub(super) struct ShadeContext<'a, C> {
     /// Offset of new ray origins from surfaces.
     pub epsilon: f32,
     pub depth: u8,
+    /// Importance in the counts (`None`: the paper's counts, bit for bit).
+    pub importance: Option<ImportanceCounts<'a>>,
 }
 
 /// The output of one batch.
@@ -82,6 +85,8 @@ pub(super) struct BatchOut {
     pub hits: u64,
     pub escaped: u64,
     pub capped: u64,
+    /// Photons not stored because nothing reads them there (importance).
+    pub unread: u64,
     /// The first hit of the batch that broke the caster contract.
     pub bad_hit: Option<BadHit>,
 }
@@ -164,7 +169,12 @@ fn shade_hit<C>(
             power *= (-sigma * h.t).exp();
         }
     }
+    // Surfaces are two-sided: the normal on the side the photon arrives from.
+    let arrival_side = h.facing(p.direction);
     if !brdf.is_specular() {
+        let read = ctx
+            .importance
+            .is_none_or(|i| i.stores(position, arrival_side));
         let record = PhotonRecord {
             position,
             power,
@@ -178,10 +188,11 @@ fn shade_hit<C>(
             }
             return;
         }
-        if ctx.keep_records {
+        if !read {
+            out.unread += 1;
+        } else if ctx.keep_records {
             out.records.push(record);
-            // Surfaces are two-sided: the normal on the side the photon arrives from.
-            out.normals.push(h.facing(p.direction));
+            out.normals.push(arrival_side);
         } else if position.is_finite() && power.is_finite() {
             // At most one store per photon of the batch: a slot is free.
             slots[out.stored] = ctx.frame.encode(&record);
@@ -217,7 +228,13 @@ fn shade_hit<C>(
     } else {
         0.0
     };
-    let (m, capped) = expected_children(s, r, ctx.split_cap);
+    // alpha_I takes both the split count and the survival (1, exactly, without
+    // importance or at a specular hit: the paper's m bit for bit).
+    let alpha_i = match ctx.importance {
+        Some(i) if !brdf.is_specular() => f64::from(i.alpha_i(position, arrival_side)),
+        _ => 1.0,
+    };
+    let (m, capped) = expected_children(s * alpha_i, r * alpha_i, ctx.split_cap);
     out.capped += u64::from(capped);
     // One stream per hit: the rounding, then each child's direction in turn.
     let mut rng = Rng::new(p.key ^ 0x5E1E_C7ED_0000_0000);

@@ -66,9 +66,11 @@
 use crate::engine::Shard;
 use crate::scene::Camera;
 
+pub mod counts;
 mod grid;
 mod pass;
 
+pub use counts::{ImportanceCounts, ALPHA_I_FLOOR, PILOT_PHOTONS};
 pub use grid::{CellGrid, ImportanceGrid, ImportanceSums, FIXED_ONE, MAX_DEPOSIT, READERS};
 pub use pass::{importance_pass, MAX_LATER_BOUNCES};
 

@@ -40,6 +40,7 @@ mod gltf_validator;
 mod hostile;
 mod hostile_values;
 mod image_checksums;
+mod importance_counts;
 mod importance_pass;
 mod isa_pinning;
 mod kdtree;
