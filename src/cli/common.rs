@@ -40,6 +40,14 @@ pub struct TraceConfigArgs {
     /// Directionality estimator: paper (the paper's clustering) or peak (peak density).
     #[arg(long, default_value = "paper", value_parser = parse_estimator)]
     pub directionality: Estimator,
+    /// Importance from the camera in the counts (adaptive mode only, beyond
+    /// the paper): `camera` traces importance from the scene's camera first
+    /// (128 x 128 x 4 samples, the gather's bounce and 4 more), then splits
+    /// photons by the adjoint where they land, rations each light's photons
+    /// by pilot photons, and stores none where nothing reads them; `off`
+    /// (default) is the paper's counts.
+    #[arg(long, default_value = "off", value_parser = ["off", "camera"])]
+    pub importance: String,
 }
 
 /// A finite `f32` (clap parser): NaN and infinities are refused with a
@@ -99,6 +107,12 @@ impl TraceConfigArgs {
             None => None,
         };
         cfg.estimator = self.directionality;
+        if self.importance == "camera" {
+            cfg.importance = Some(adaptive_pm::importance::ImportanceConfig {
+                seed: self.seed,
+                ..Default::default()
+            });
+        }
         cfg.validate()?;
         Ok(cfg)
     }
