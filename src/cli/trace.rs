@@ -109,6 +109,15 @@ struct Outcome<'a> {
 impl Outcome<'_> {
     /// The `--json` object.
     fn json(&self) -> serde_json::Value {
+        let mut v = self.base_json();
+        // Only with --importance camera: the paper's runs print what they did.
+        if let (Some(imp), Some(m)) = (&self.report.importance, v.as_object_mut()) {
+            m.insert("importance".into(), json!(imp));
+        }
+        v
+    }
+
+    fn base_json(&self) -> serde_json::Value {
         let o = self;
         json!({
             "scene": o.args.scene,
@@ -167,6 +176,12 @@ impl Outcome<'_> {
             println!(
                 "  light {i}: {} photons (alpha_E {:.3}, alpha_A {:.3}, alpha_D {:.4})",
                 p.photons, p.alpha_e, p.alpha_a, p.alpha_d
+            );
+        }
+        if let Some(imp) = &o.report.importance {
+            println!(
+                "importance     pass {:.3} s, {} cells, emission alpha_I {:?}, {} photons unread",
+                imp.pass_s, imp.cells, imp.emission_alpha_i, imp.unread
             );
         }
         println!("emitted        {}", o.report.emitted);

@@ -138,3 +138,16 @@ pub fn prepare<C: RayCaster>(
     };
     Ok((grid, report))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scaled_counts_keep_a_photon_and_round() {
+        assert_eq!(scaled_photons(0, 0.5), 0);
+        assert_eq!(scaled_photons(1000, 0.5), 500);
+        assert_eq!(scaled_photons(3, ALPHA_I_FLOOR), 1);
+        assert_eq!(scaled_photons(1000, 1.0), 1000);
+    }
+}

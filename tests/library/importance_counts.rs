@@ -166,7 +166,10 @@ fn importance_keeps_classic_power_where_it_is_read() {
     }
 }
 
-fn record_keys(records: &[PhotonRecord]) -> Vec<([u32; 3], [u32; 3], [u32; 3], u8)> {
+/// A record's bits: position, power, direction, depth.
+type RecordKey = ([u32; 3], [u32; 3], [u32; 3], u8);
+
+fn record_keys(records: &[PhotonRecord]) -> Vec<RecordKey> {
     let b = |v: Vec3| v.to_array().map(f32::to_bits);
     let mut k: Vec<_> = records
         .iter()
