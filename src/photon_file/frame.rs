@@ -160,9 +160,15 @@ pub fn scene_hash(scene: &Scene) -> u64 {
 }
 
 /// A hash of the settings that change the photons but have no field of their
-/// own in the header: the directionality analysis's constants.
+/// own in the header: the directionality analysis's constants, and the
+/// importance pass when there is one.
 pub fn settings_hash(cfg: &TraceConfig) -> u64 {
-    debug_hash(0x5E771, &cfg.analysis)
+    match &cfg.importance {
+        None => debug_hash(0x5E771, &cfg.analysis),
+        // Importance changes every count: shards with other passes (or
+        // none) never merge. Without it, the hash is what it always was.
+        Some(imp) => debug_hash(0x5E771, &(&cfg.analysis, imp)),
+    }
 }
 
 #[cfg(test)]

@@ -211,3 +211,24 @@ fn only_the_adaptive_mode_takes_importance() {
     assert!(c.validate().is_err());
     assert!(config(Mode::Adaptive, 100, 1, true).validate().is_ok());
 }
+
+#[test]
+fn shards_with_and_without_importance_never_merge() {
+    use adaptive_pm::photon_file::settings_hash;
+    let paper = config(Mode::Adaptive, 100, 1, false);
+    let seen = config(Mode::Adaptive, 100, 1, true);
+    assert_ne!(settings_hash(&paper), settings_hash(&seen));
+    let mut other = seen.clone();
+    if let Some(i) = other.importance.as_mut() {
+        i.later_bounces += 1;
+    }
+    assert_ne!(settings_hash(&other), settings_hash(&seen));
+    // The paper's files keep the hash they always had.
+    assert_eq!(
+        settings_hash(&paper),
+        settings_hash(&TraceConfig {
+            seed: 1,
+            ..TraceConfig::new(Mode::Adaptive, Budget::NMax(100))
+        })
+    );
+}
