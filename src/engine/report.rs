@@ -87,6 +87,10 @@ pub struct ImportanceReport {
     pub cells: usize,
     /// Each light's emission alpha_I (from its pilot photons).
     pub emission_alpha_i: Vec<f32>,
+    /// `A_ref`, the adjoint alpha_I divides by (the pilot photons' mean at
+    /// their first hits, weighted by the lights' power; 0: the read cells'
+    /// mean was used).
+    pub reference_adjoint: f32,
     /// Photons not stored because nothing reads them where they landed.
     pub unread: u64,
 }

@@ -21,12 +21,19 @@ use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
 
 /// An upper bound of the children a wave can make: the sum over its photons of
-/// `min(cap, max(alpha_E N_MAX, 1)) + 1` (`alpha_D <= 1`, Russian roulette
-/// makes at most one child, and rounding up adds at most one). Each term is
+/// `min(cap, max(alpha_max alpha_E N_MAX, 1)) + 1` (`alpha_D <= 1`, Russian
+/// roulette makes at most one child, rounding up adds at most one, and
+/// `alpha_max` bounds importance's `alpha_I`: 1 without it). Each term is
 /// rounded up to a multiple of 2^-16 and summed as an integer: exact, so the
 /// bound does not depend on how the wave is cut into chunks and batches, nor
 /// on the thread count.
-fn split_bound(wave: &[Vec<PathState>], max_light_luminance: f32, n_max: u64, cap: u32) -> f64 {
+fn split_bound(
+    wave: &[Vec<PathState>],
+    max_light_luminance: f32,
+    n_max: u64,
+    cap: u32,
+    alpha_max: f64,
+) -> f64 {
     const UNIT: f64 = 65_536.0;
     let units: u128 = wave
         .par_iter()
@@ -35,7 +42,7 @@ fn split_bound(wave: &[Vec<PathState>], max_light_luminance: f32, n_max: u64, ca
             let s = luminance(p.power) as f64 / max_light_luminance as f64 * n_max as f64;
             // At most (cap + 1) 2^16 <= 2^48: exact in a u64. Rounded up
             // without `ceil` (a libm call on baseline x86-64).
-            let v = (s.max(1.0).min(cap as f64) + 1.0) * UNIT;
+            let v = ((s * alpha_max).max(1.0).min(cap as f64) + 1.0) * UNIT;
             let whole = v as u64;
             u128::from(whole + u64::from((whole as f64) < v))
         })
@@ -259,6 +266,12 @@ impl<C: RayCaster> Tracer<C> {
         let kernels = self.prepared.caster().kernels();
         let mut report = TraceReport::new(cfg.mode(), n_max, &plans, kernels);
         report.importance = importance.as_ref().map(|(_, r)| r.clone());
+        // alpha_I multiplies a hit's children by up to ALPHA_I_MAX (1, exactly,
+        // without importance: the paper's bound bit for bit).
+        let alpha_max = match &importance {
+            Some(_) => f64::from(crate::importance::ALPHA_I_MAX),
+            None => 1.0,
+        };
         let frame = map_frame(scene, &plans);
         let start = Instant::now();
         let mut density = density_control(scene, cfg, emitted, &frame)?;
@@ -293,7 +306,13 @@ impl<C: RayCaster> Tracer<C> {
             }
             let split_scale = if splitting {
                 let room = ((max_photons / 2).saturating_sub(used) / (path_cost + 1)) as f64;
-                let bound = split_bound(&wave, max_light_luminance, n_max, cfg.split_cap());
+                let bound = split_bound(
+                    &wave,
+                    max_light_luminance,
+                    n_max,
+                    cfg.split_cap(),
+                    alpha_max,
+                );
                 wave_split_scale(room, bound, &mut report)
             } else {
                 1.0
@@ -321,7 +340,9 @@ impl<C: RayCaster> Tracer<C> {
                 frame,
                 epsilon,
                 depth: depth as u8,
-                importance: importance.as_ref().map(|(g, _)| ImportanceCounts::new(g)),
+                importance: importance
+                    .as_ref()
+                    .map(|(g, r)| ImportanceCounts::new(g, r.reference_adjoint)),
             };
             let outs = trace_wave(&ctx, &wave, &mut photons, cfg.batch(), density.is_some());
             absorb_wave(scene, outs, depth, &mut report, &mut density, &mut schedule)?;

@@ -228,13 +228,14 @@ fn shade_hit<C>(
     } else {
         0.0
     };
-    // alpha_I takes both the split count and the survival (1, exactly, without
-    // importance or at a specular hit: the paper's m bit for bit).
+    // alpha_I takes the split count and, up to 1, the survival: splitting
+    // stays with `s`, which the wave's budget scales (alpha_I is 1, exactly,
+    // without importance or at a specular hit: the paper's m bit for bit).
     let alpha_i = match ctx.importance {
         Some(i) if !brdf.is_specular() => f64::from(i.alpha_i(position, arrival_side)),
         _ => 1.0,
     };
-    let (m, capped) = expected_children(s * alpha_i, r * alpha_i, ctx.split_cap);
+    let (m, capped) = expected_children(s * alpha_i, r * alpha_i.min(1.0), ctx.split_cap);
     out.capped += u64::from(capped);
     // One stream per hit: the rounding, then each child's direction in turn.
     let mut rng = Rng::new(p.key ^ 0x5E1E_C7ED_0000_0000);

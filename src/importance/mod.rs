@@ -70,7 +70,7 @@ pub mod counts;
 mod grid;
 mod pass;
 
-pub use counts::{ImportanceCounts, ALPHA_I_FLOOR, PILOT_PHOTONS};
+pub use counts::{ImportanceCounts, ALPHA_I_FLOOR, ALPHA_I_MAX, PILOT_PHOTONS};
 pub use grid::{CellGrid, ImportanceGrid, ImportanceSums, FIXED_ONE, MAX_DEPOSIT, READERS};
 pub use pass::{importance_pass, MAX_LATER_BOUNCES};
 

@@ -232,3 +232,85 @@ fn shards_with_and_without_importance_never_merge() {
         })
     );
 }
+
+/// Two unit rooms side by side, joined by a gap 0.1 wide in their shared
+/// wall (x = 1); the light in room B, the camera in room A looking at its
+/// back wall, away from the gap.
+fn rooms_with_a_gap() -> Scene {
+    let mut s = Scene::new();
+    let (wall, lamp) = (
+        material(&mut s, 0.6, None),
+        material(&mut s, 0.0, Some(20.0)),
+    );
+    let v = Vec3::new;
+    // The outer box [0, 2] x [0, 1] x [0, 1].
+    for q in [
+        [v(0., 0., 0.), v(2., 0., 0.), v(2., 0., 1.), v(0., 0., 1.)],
+        [v(0., 1., 0.), v(0., 1., 1.), v(2., 1., 1.), v(2., 1., 0.)],
+        [v(0., 0., 0.), v(0., 1., 0.), v(2., 1., 0.), v(2., 0., 0.)],
+        [v(0., 0., 1.), v(2., 0., 1.), v(2., 1., 1.), v(0., 1., 1.)],
+        [v(0., 0., 0.), v(0., 0., 1.), v(0., 1., 1.), v(0., 1., 0.)],
+        [v(2., 0., 0.), v(2., 1., 0.), v(2., 1., 1.), v(2., 0., 1.)],
+    ] {
+        quad(&mut s, q, wall);
+    }
+    // The shared wall, but for a gap z in [0.45, 0.55] below y = 0.8.
+    let piece =
+        |z0: f32, z1: f32, y0: f32| [v(1., y0, z0), v(1., 1., z0), v(1., 1., z1), v(1., y0, z1)];
+    for q in [
+        piece(0.0, 0.45, 0.0),
+        piece(0.55, 1.0, 0.0),
+        piece(0.45, 0.55, 0.8),
+    ] {
+        quad(&mut s, q, wall);
+    }
+    let light = [(1.3, 0.3), (1.3, 0.7), (1.7, 0.7), (1.7, 0.3)].map(|(x, z)| v(x, 0.95, z));
+    quad(&mut s, light, lamp);
+    let eye = v(0.5, 0.5, 0.05);
+    s.set_camera(Camera::look_at(eye, v(0.5, 0.45, 1.0), Vec3::Y, 50.0).unwrap())
+        .unwrap();
+    s
+}
+
+/// Not a check: the noise of the power stored near seen points, per mode,
+/// at one `N_MAX`, scaled to equal stored photons (memory). Run with
+/// `cargo test --test library importance_counts::measure_rooms_with_a_gap -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn measure_rooms_with_a_gap() {
+    let t = tracer(&rooms_with_a_gap());
+    let points = [
+        (Vec3::new(0.5, 0.5, 1.0), -Vec3::Z),
+        (Vec3::new(0.3, 0.3, 1.0), -Vec3::Z),
+        (Vec3::new(0.7, 0.6, 1.0), -Vec3::Z),
+    ];
+    let shards = 16u32;
+    for (mode, imp) in [
+        (Mode::Classic, false),
+        (Mode::Adaptive, false),
+        (Mode::Adaptive, true),
+    ] {
+        let mut per_point = vec![common::MeanVar::default(); points.len()];
+        let (mut stored, mut seconds) = (0u64, 0.0f64);
+        for i in 0..shards {
+            let mut c = config(mode, 64_000, 7, imp);
+            c.shard = Shard::new(i, shards).unwrap();
+            let out = trace(&t, &c, 2);
+            stored += out.report.stored;
+            seconds +=
+                out.report.trace_s + out.report.importance.as_ref().map_or(0.0, |r| r.pass_s);
+            let records = out.records();
+            for (m, &(p, n)) in per_point.iter_mut().zip(&points) {
+                m.push(power_near(&records, p, n, 0.1));
+            }
+        }
+        let rel: Vec<f64> = per_point.iter().map(|m| m.std_error() / m.mean()).collect();
+        let mean_rel = rel.iter().sum::<f64>() / rel.len() as f64;
+        println!(
+            "{mode} importance {imp}: stored {stored}, {seconds:.2} s, power near points {:?}, rel. std error {mean_rel:.4}, x sqrt(stored) {:.2}, x sqrt(s) {:.4}",
+            per_point.iter().map(|m| m.mean()).collect::<Vec<_>>(),
+            mean_rel * (stored as f64).sqrt(),
+            mean_rel * seconds.sqrt(),
+        );
+    }
+}
