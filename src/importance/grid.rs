@@ -24,6 +24,14 @@ pub const READERS: usize = 3;
 /// per axis, far beyond the 1/fraction cells a scene's diagonal spans.
 const COORD_BITS: u32 = 19;
 const COORD_MASK: u64 = (1 << COORD_BITS) - 1;
+/// The level bit of a coarse (adjoint) cell's key.
+const COARSE: u64 = 1 << 60;
+
+/// The adjoint's cells are this many cells a side: later bounces spread
+/// their deposits thin, and 16 times the area per cell averages them (the
+/// alpha_I they set would otherwise be noise, most cells of a room seen
+/// only through a door holding no deposit at all).
+pub const ADJOINT_COARSENING: i64 = 4;
 
 /// A throughput as a fixed-point deposit (0 for NaN, negative or zero).
 pub(crate) fn to_fixed(w: f32) -> u64 {
@@ -82,6 +90,32 @@ impl CellGrid {
         let g = ((x - self.origin) / self.cell).floor();
         let c = |v: f32| (v.clamp(-1e15, 1e15) as i64 as u64) & COORD_MASK;
         c(g.x) | (c(g.y) << COORD_BITS) | (c(g.z) << (2 * COORD_BITS)) | (bucket(n) << 57)
+    }
+
+    /// The key of the adjoint's coarse cell of `x` (side
+    /// [`ADJOINT_COARSENING`] cells) seen from the side of `n`.
+    pub fn coarse_key(&self, x: Vec3, n: Vec3) -> u64 {
+        let side = self.cell * ADJOINT_COARSENING as f32;
+        let g = ((x - self.origin) / side).floor();
+        let c = |v: f32| (v.clamp(-1e15, 1e15) as i64 as u64) & COORD_MASK;
+        let xyz = c(g.x) | (c(g.y) << COORD_BITS) | (c(g.z) << (2 * COORD_BITS));
+        xyz | (bucket(n) << 57) | COARSE
+    }
+
+    /// The coarse key of the cell `key` (the same as [`CellGrid::coarse_key`]
+    /// of its points: scaling by 4 commutes with rounding).
+    fn coarse_of(key: u64) -> u64 {
+        let signed = |i: u32| {
+            let v = ((key >> (i * COORD_BITS)) & COORD_MASK) as i64;
+            if v >= 1 << (COORD_BITS - 1) {
+                v - (1 << COORD_BITS)
+            } else {
+                v
+            }
+        };
+        let c = |i: u32| (signed(i).div_euclid(ADJOINT_COARSENING) as u64) & COORD_MASK;
+        let xyz = c(0) | (c(1) << COORD_BITS) | (c(2) << (2 * COORD_BITS));
+        xyz | (key & (7 << 57)) | COARSE
     }
 
     /// The 26 cells around `key`'s, in its bucket.
@@ -257,14 +291,9 @@ impl ImportanceGrid {
         // neighbours are kept too, flagged, so that photons next to what is
         // read are stored (a kernel reaches past its cell).
         let mut values: HashMap<u64, (f32, f32, bool)> = HashMap::new();
-        let (mut adjoint_sum, mut read_cells) = (0.0f64, 0u64);
         for (k, s) in &sums.cells {
             let read = sums.density(s, 0) + sums.density(s, 1);
             let adjoint = read + sums.density(s, 2);
-            if read > 0.0 {
-                adjoint_sum += adjoint;
-                read_cells += 1;
-            }
             let e = values.entry(*k).or_insert((0.0, 0.0, false));
             (e.0, e.1) = (read as f32, adjoint as f32);
         }
@@ -275,19 +304,42 @@ impl ImportanceGrid {
                 }
             }
         }
+        // The coarse cells' adjoint: every reader's deposits over their
+        // (4 h)^2.
+        let mut coarse: HashMap<u64, u128> = HashMap::new();
+        for (k, s) in &sums.cells {
+            let sum: u128 = s.iter().map(|&v| u128::from(v)).sum();
+            *coarse.entry(CellGrid::coarse_of(*k)).or_default() += sum;
+        }
+        let side = f64::from(sums.grid.cell) * ADJOINT_COARSENING as f64;
+        let area = sums.samples.max(1) as f64 * side * side;
+        for (k, sum) in coarse {
+            let adjoint = (sum as f64 / FIXED_ONE / area) as f32;
+            values.insert(k, (0.0, adjoint, false));
+        }
         let mut keys: Vec<u64> = values.keys().copied().collect();
         keys.sort_unstable();
         let mut grid = ImportanceGrid {
             slots: vec![Slot::default(); (2 * keys.len()).max(1)],
             grid: sums.grid,
             cells: keys.len(),
-            adjoint_ref: (adjoint_sum / read_cells.max(1) as f64) as f32,
+            adjoint_ref: 0.0,
         };
         for k in keys {
             let (read, adjoint, near) = values[&k];
             let read = to_bf16(read) | if near || read > 0.0 { NEAR_READ } else { 0 };
             grid.insert(k, read, to_bf16(adjoint));
         }
+        // The mean adjoint of the read cells, at their coarse cells.
+        let (mut adjoint_sum, mut read_cells) = (0.0f64, 0u64);
+        for (k, s) in &sums.cells {
+            if s[0] > 0 || s[1] > 0 {
+                adjoint_sum +=
+                    f64::from(from_bf16(grid.probe_key(CellGrid::coarse_of(*k)).adjoint));
+                read_cells += 1;
+            }
+        }
+        grid.adjoint_ref = (adjoint_sum / read_cells.max(1) as f64) as f32;
         grid
     }
 
@@ -306,7 +358,11 @@ impl ImportanceGrid {
     }
 
     fn probe(&self, x: Vec3, n: Vec3) -> Slot {
-        let hash = mix64(self.grid.key(x, n));
+        self.probe_key(self.grid.key(x, n))
+    }
+
+    fn probe_key(&self, key: u64) -> Slot {
+        let hash = mix64(key);
         let tag = (hash >> 32) as u32 | 1;
         let mut i = self.home(hash);
         loop {
@@ -334,7 +390,7 @@ impl ImportanceGrid {
     /// The adjoint estimate at `x` (side of `n`): the importance of what
     /// is read there plus what camera paths bring there from later bounces.
     pub fn adjoint(&self, x: Vec3, n: Vec3) -> f32 {
-        from_bf16(self.probe(x, n).adjoint)
+        from_bf16(self.probe_key(self.grid.coarse_key(x, n)).adjoint)
     }
 
     /// The mean adjoint over the read cells: the reference alpha_I divides by.
@@ -403,7 +459,18 @@ mod tests {
         let h = g.cell_size();
         let want = 2.0 / (4.0 * h * h);
         assert!((grid.read(x, Vec3::Y) / want - 1.0).abs() < 1.0 / 128.0);
-        assert!((grid.adjoint(x, Vec3::Y) / (1.5 * want) - 1.0).abs() < 1.0 / 128.0);
+        // The adjoint is the coarse cell's: 16 times the area.
+        let coarse = 1.5 * want / 16.0;
+        assert!((grid.adjoint(x, Vec3::Y) / coarse - 1.0).abs() < 1.0 / 128.0);
+        assert_eq!(
+            CellGrid::coarse_of(g.key(x, Vec3::Y)),
+            g.coarse_key(x, Vec3::Y)
+        );
+        let below = Vec3::new(-0.01, 0.5, 0.1);
+        assert_eq!(
+            CellGrid::coarse_of(g.key(below, Vec3::Y)),
+            g.coarse_key(below, Vec3::Y)
+        );
         assert_eq!(grid.read(x, -Vec3::Y), 0.0);
         assert!(grid.near_read(x + Vec3::X * h, Vec3::Y));
         assert!(!grid.near_read(x + Vec3::X * 2.0 * h, Vec3::Y));

@@ -57,6 +57,12 @@
 //! | 4-5 | read importance (first + gather), bfloat16; its sign bit flags a cell that is read or next to one |
 //! | 6-7 | adjoint (first + gather + later), bfloat16 |
 //!
+//! The adjoint is read from **coarse cells** of side
+//! [`ADJOINT_COARSENING`]` h` = 4 h, in the same table (a level bit in the
+//! key; their read field is 0): later bounces spread their deposits thin,
+//! and a room seen only through a door would otherwise be mostly cells
+//! without a single deposit, each photon there rouletted to the floor.
+//!
 //! One probe per lookup ([`ImportanceGrid::read`], [`ImportanceGrid::adjoint`],
 //! [`ImportanceGrid::near_read`]); a tag collision, odds about cells / 2^32
 //! per lookup, reads a wrong cell. The 26 neighbours of a read cell are kept
@@ -71,7 +77,9 @@ mod grid;
 mod pass;
 
 pub use counts::{ImportanceCounts, ALPHA_I_FLOOR, ALPHA_I_MAX, PILOT_PHOTONS};
-pub use grid::{CellGrid, ImportanceGrid, ImportanceSums, FIXED_ONE, MAX_DEPOSIT, READERS};
+pub use grid::{
+    CellGrid, ImportanceGrid, ImportanceSums, ADJOINT_COARSENING, FIXED_ONE, MAX_DEPOSIT, READERS,
+};
 pub use pass::{importance_pass, MAX_LATER_BOUNCES};
 
 /// Default cell side as a fraction of the scene's bounding-box diagonal.

@@ -285,16 +285,20 @@ fn measure_rooms_with_a_gap() {
         (Vec3::new(0.7, 0.6, 1.0), -Vec3::Z),
     ];
     let shards = 16u32;
+    let small = Some(importance());
+    let default = Some(ImportanceConfig::default());
     for (mode, imp) in [
-        (Mode::Classic, false),
-        (Mode::Adaptive, false),
-        (Mode::Adaptive, true),
+        (Mode::Classic, None),
+        (Mode::Adaptive, None),
+        (Mode::Adaptive, small),
+        (Mode::Adaptive, default),
     ] {
         let mut per_point = vec![common::MeanVar::default(); points.len()];
         let (mut stored, mut seconds) = (0u64, 0.0f64);
         for i in 0..shards {
-            let mut c = config(mode, 64_000, 7, imp);
+            let mut c = config(mode, 64_000, 7, false);
             c.shard = Shard::new(i, shards).unwrap();
+            c.importance = imp;
             let out = trace(&t, &c, 2);
             stored += out.report.stored;
             seconds +=
@@ -307,7 +311,8 @@ fn measure_rooms_with_a_gap() {
         let rel: Vec<f64> = per_point.iter().map(|m| m.std_error() / m.mean()).collect();
         let mean_rel = rel.iter().sum::<f64>() / rel.len() as f64;
         println!(
-            "{mode} importance {imp}: stored {stored}, {seconds:.2} s, power near points {:?}, rel. std error {mean_rel:.4}, x sqrt(stored) {:.2}, x sqrt(s) {:.4}",
+            "{mode} importance {:?}: stored {stored}, {seconds:.2} s, power near points {:?}, rel. std error {mean_rel:.4}, x sqrt(stored) {:.2}, x sqrt(s) {:.4}",
+            imp.map(|i| (i.width, i.height, i.spp)),
             per_point.iter().map(|m| m.mean()).collect::<Vec<_>>(),
             mean_rel * (stored as f64).sqrt(),
             mean_rel * seconds.sqrt(),
