@@ -75,12 +75,12 @@ use crate::scene::Camera;
 pub mod counts;
 mod grid;
 mod pass;
+mod table;
 
 pub use counts::{ImportanceCounts, ALPHA_I_FLOOR, ALPHA_I_MAX, PILOT_PHOTONS};
-pub use grid::{
-    CellGrid, ImportanceGrid, ImportanceSums, ADJOINT_COARSENING, FIXED_ONE, MAX_DEPOSIT, READERS,
-};
+pub use grid::{CellGrid, ImportanceSums, ADJOINT_COARSENING, FIXED_ONE, MAX_DEPOSIT, READERS};
 pub use pass::{importance_pass, MAX_LATER_BOUNCES};
+pub use table::ImportanceGrid;
 
 /// Default cell side as a fraction of the scene's bounding-box diagonal.
 pub const DEFAULT_CELL_FRACTION: f32 = 1.0 / 64.0;
