@@ -235,7 +235,7 @@ fn render_spp_auto_reports_its_noise_and_refuses_what_cannot_apply() {
     .concat();
     let v = json(&args);
     let spp = v["spp"].as_u64().unwrap();
-    assert!(spp >= 8 && spp <= 1024, "{v}");
+    assert!((8..=1024).contains(&spp), "{v}");
     let noise = v["noise_estimate"].as_f64().unwrap();
     assert_eq!(v["noise_target_reached"], noise <= 0.2, "{v}");
     let fixed = [
