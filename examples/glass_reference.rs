@@ -1,14 +1,15 @@
 //! The photon render of `cornell-glass` against a converged path-traced
 //! reference of the same scene (issue: glass and caustics, "done when").
 //!
-//! `cargo run --release --example glass_reference -- [REF_SPP] [SIZE] [N_MAX] [SPP] [CAUSTIC_K]`
-//! (defaults 16384, 256, and `render`'s defaults N_MAX 1e5 and 4 spp):
-//! path-traces the
+//! `cargo run --release --example glass_reference -- [REF_SPP] [SIZE] [N_MAX] [SPP] [CAUSTIC]`
+//! (defaults 16384, 256, and `render`'s defaults: N_MAX 1e5, `--spp auto`
+//! with its noise target, a caustic pass of `auto` photons; SPP a number
+//! for a fixed count, CAUSTIC a number, 0 for no pass): path-traces the
 //! reference as two independent halves of REF_SPP/2 samples each (cached as
 //! OpenEXR in `target/glass-reference`, keyed by the scene, size and spp,
-//! since the reference takes minutes), renders the photon image (adaptive,
-//! gather through the cache, the other settings `render`'s defaults, but
-//! no caustic pass: `render --caustic-photons 0`), and
+//! since the reference takes minutes), renders the photon image as `render`
+//! does (adaptive, caustic pass, gather through the cache, the other
+//! settings `render`'s defaults), and
 //! prints the relRMSE over the pixels that are not a light's own (its
 //! noise, from the halves, taken out in quadrature), the mean per channel
 //! against the reference's, and the same over the caustic's pixels (first
@@ -16,11 +17,11 @@
 //! seen from the camera are left out of both images (exact in both).
 
 use adaptive_pm::embree::Device;
-use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
+use adaptive_pm::engine::{Budget, CausticBudget, Mode, TraceConfig, Tracer};
 use adaptive_pm::experiments::render_study::caustic_pixels;
 use adaptive_pm::render::{
-    light_pixels, mean_bias, relative_rmse_masked, render, render_path_with, Image, PathHalves,
-    PathPart, RenderConfig,
+    light_pixels, mean_bias, relative_rmse_masked, render, render_path_with, render_progressive,
+    Image, NoiseTarget, PathHalves, PathPart, RenderConfig,
 };
 use adaptive_pm::scene::Scene;
 use std::path::PathBuf;
@@ -31,10 +32,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ref_spp: u32 = args.first().map_or(Ok(16384), |s| s.parse())?;
     let size: u32 = args.get(1).map_or(Ok(256), |s| s.parse())?;
     let n_max: u64 = args.get(2).map_or(Ok(100_000), |s| s.parse())?;
-    let spp: u32 = args.get(3).map_or(Ok(4), |s| s.parse())?;
-    let caustic_k: usize = args
-        .get(4)
-        .map_or(Ok(adaptive_pm::render::DEFAULT_CAUSTIC_K), |s| s.parse())?;
+    let spp: Option<u32> = match args.get(3).map(String::as_str) {
+        None | Some("auto") => None,
+        Some(n) => Some(n.parse()?),
+    };
+    let caustic = match args.get(4).map(String::as_str) {
+        None | Some("auto") => CausticBudget::Auto,
+        Some(n) => CausticBudget::Photons(n.parse()?),
+    };
     let dir = PathBuf::from("target/glass-reference");
     std::fs::create_dir_all(&dir)?;
     let scene = Scene::open("cornell-glass")?;
@@ -87,19 +92,39 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let caustic_noise = halves.noise_rel(Some(&caustic_mask));
 
     let t = Instant::now();
-    let out = tracer.trace(&TraceConfig::new(Mode::Adaptive, Budget::NMax(n_max)))?;
-    let mut pc = base.clone();
-    pc.spp = spp;
-    pc.caustic_k = caustic_k;
-    let maps = pc.build_maps(out.photons, out.frame);
-    let img = render(prepared, Some(&maps), &pc)?;
+    let trace_cfg = TraceConfig::new(Mode::Adaptive, Budget::NMax(n_max));
+    let out = tracer.trace(&trace_cfg)?;
+    let mut maps = base.build_maps(out.photons, out.frame);
+    let n_caustic = caustic.photons(tracer.scene(), n_max);
+    if n_caustic > 0 {
+        maps = maps.with_caustic_pass(tracer.trace_caustic(&trace_cfg, n_caustic)?);
+    }
+    let (img, spp_used, own_noise) = match spp {
+        Some(n) => {
+            let mut pc = base.clone();
+            pc.spp = n;
+            (render(prepared, Some(&maps), &pc)?, n, None)
+        }
+        None => {
+            let target = NoiseTarget::default();
+            let (p, _) = render_progressive(
+                prepared,
+                Some(&maps),
+                &base.check()?,
+                &target,
+                &|_, _| {},
+                &mut |r| eprintln!("render: {} spp, noise {:.2} %", r.spp, 100.0 * r.noise),
+            )?;
+            (p.image, p.spp, Some(p.noise))
+        }
+    };
     let photon_s = t.elapsed().as_secs_f64();
 
     // The images, to look at (the photon render's name carries its settings).
     let tone = adaptive_pm::render::ToneMap::default();
     reference.write_png(dir.join(format!("reference-{size}-{ref_spp}.png")), tone)?;
     img.write_png(
-        dir.join(format!("photon-{size}-{n_max}-{spp}-{caustic_k}.png")),
+        dir.join(format!("photon-{size}-{n_max}-{spp_used}-{n_caustic}.png")),
         tone,
     )?;
     let free = |e: f64, n: f64| (e * e - n * n).max(0.0).sqrt();
@@ -113,7 +138,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         100.0 * caustic_noise
     );
     println!(
-        "photon render (adaptive, N_MAX {n_max}, {spp} spp, caustic k {caustic_k}): {photon_s:.2} s"
+        "photon render (adaptive, N_MAX {n_max}, caustic pass {n_caustic} photons, {spp_used} spp{}): {photon_s:.2} s",
+        own_noise.map_or(String::new(), |n| format!(", spp auto: own noise {:.2} %", 100.0 * n))
     );
     println!(
         "  relRMSE over the non-light pixels: {:.2} % measured, {:.2} % with the reference's noise taken out",

@@ -7,6 +7,7 @@ pub mod common;
 pub mod merge;
 pub mod render;
 pub mod render_path;
+pub mod render_spp;
 pub mod scene;
 pub mod shard;
 pub mod trace;

@@ -4,6 +4,7 @@
 use super::common::{
     open_scene, progress_bar, AssetRootArgs, EmbreeArgs, ThreadArgs, TraceConfigArgs,
 };
+use super::render_spp::{first_spp, noise_target, photon_image, Spp, SppOutcome};
 use adaptive_pm::embree::EmbreeScene;
 use adaptive_pm::engine::caustic::BYTES_PER_CAUSTIC_PHOTON;
 use adaptive_pm::engine::tracer::BYTES_PER_STORED_PHOTON;
@@ -11,8 +12,8 @@ use adaptive_pm::engine::{CausticBudget, CausticReport, Mode, TraceConfig, Trace
 use adaptive_pm::output::refuse_overwrite;
 use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
-    cache::DEFAULT_STRIDE, check_output_path, render_checked, tile_rows, CheckedRender, Image,
-    Integrator, RenderConfig, RenderMaps, RenderStats, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
+    cache::DEFAULT_STRIDE, check_output_path, tile_rows, CheckedRender, Image, Integrator,
+    RenderConfig, RenderMaps, RenderStats, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
 };
 use adaptive_pm::scene::Scene;
 use anyhow::Context;
@@ -42,9 +43,18 @@ pub struct RenderArgs {
     pub threads: ThreadArgs,
     #[command(flatten)]
     pub embree: EmbreeArgs,
-    /// Samples per pixel.
-    #[arg(long, default_value_t = 4)]
-    pub spp: u32,
+    /// Samples per pixel, or `auto`: rounds of two independent half images
+    /// until their estimated relative noise (rms over the pixels that are
+    /// not a light's, of the mean) is at most --noise, or --max-spp. The
+    /// noise seen is the render's own: the photon map's error is not in it.
+    #[arg(long, default_value = "auto")]
+    pub spp: Spp,
+    /// With --spp auto: the relative noise to stop at (default 0.02, 2 %).
+    #[arg(long)]
+    pub noise: Option<f64>,
+    /// With --spp auto: the most samples per pixel (default 1024).
+    #[arg(long)]
+    pub max_spp: Option<u32>,
     /// Image width in pixels.
     #[arg(long, default_value_t = 256)]
     pub width: u32,
@@ -115,12 +125,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     if let Some(imp) = trace_cfg.importance.as_mut() {
         match_render(imp, &cfg);
     }
+    let target = noise_target(&args)?;
     check_outputs(&args)?;
     let pool = args.threads.pool()?;
     let device = args.embree.device()?;
     let prepared = Arc::new(scene.commit(&device)?);
     if args.integrator == Integrator::Path {
-        return super::render_path::run_path(&args, &prepared, &cfg, &pool);
+        return super::render_path::run_path(&args, &prepared, &cfg, target.as_ref(), &pool);
     }
     let bar = progress_bar(!args.json);
     let (maps, trace_s, photons, caustic) = if cfg.view == View::DirectOnly {
@@ -136,10 +147,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     bar.set_length(args.height as u64);
     bar.set_message("render");
     let t = Instant::now();
-    let (image, stats) = pool.install(|| {
-        render_checked(&*prepared, maps.as_ref(), None, &cfg, &|done, _| {
-            bar.set_position(done)
-        })
+    let (image, stats, spp) = pool.install(|| {
+        photon_image(
+            &prepared,
+            maps.as_ref(),
+            &cfg,
+            target.as_ref(),
+            &|done, _| bar.set_position(done),
+        )
     })?;
     let render_s = t.elapsed().as_secs_f64();
     bar.finish_and_clear();
@@ -158,15 +173,14 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         map_build_s: maps.as_ref().map_or(0.0, |m| m.build_total_s()),
         render_s,
     };
-    report(
-        &args,
-        &cfg,
-        &image,
-        &stats,
+    let run = RunReport {
+        stats: &stats,
+        spp,
         photons,
-        &times,
-        caustic.as_ref(),
-    );
+        times: &times,
+        caustic: caustic.as_ref(),
+    };
+    report(&args, &cfg, &image, &run);
     Ok(())
 }
 
@@ -230,7 +244,7 @@ fn print_caustic(caustic: Option<&CausticReport>) {
 /// runs on them as they are).
 fn render_config(args: &RenderArgs) -> anyhow::Result<CheckedRender> {
     let mut cfg = RenderConfig::new(args.width, args.height);
-    cfg.spp = args.spp;
+    cfg.spp = first_spp(args.spp);
     cfg.final_gather = args.final_gather;
     cfg.light_samples = args.light_samples;
     cfg.cache_stride = args.cache_stride;
@@ -307,16 +321,24 @@ struct Times {
     render_s: f64,
 }
 
-/// Prints what the render did: one JSON object, or lines of text.
-fn report(
-    args: &RenderArgs,
-    cfg: &RenderConfig,
-    image: &Image,
-    stats: &RenderStats,
+/// What a render did besides its image.
+struct RunReport<'a> {
+    stats: &'a RenderStats,
+    spp: SppOutcome,
     photons: usize,
-    times: &Times,
-    caustic: Option<&CausticReport>,
-) {
+    times: &'a Times,
+    caustic: Option<&'a CausticReport>,
+}
+
+/// Prints what the render did: one JSON object, or lines of text.
+fn report(args: &RenderArgs, cfg: &RenderConfig, image: &Image, run: &RunReport) {
+    let RunReport {
+        stats,
+        spp,
+        photons,
+        times,
+        caustic,
+    } = *run;
     let mean = image.mean();
     let samples_per_s = stats.samples as f64 / times.render_s.max(1e-9);
     if args.json {
@@ -328,7 +350,9 @@ fn report(
                 "view": format!("{:?}", cfg.view),
                 "width": args.width,
                 "height": args.height,
-                "spp": args.spp,
+                "spp": spp.spp,
+                "noise_estimate": spp.noise.map(|n| n.0),
+                "noise_target_reached": spp.noise.map(|n| n.1),
                 "final_gather": args.final_gather,
                 "light_samples": args.light_samples,
                 "cache_stride": args.cache_stride,
@@ -360,9 +384,10 @@ fn report(
         times.render_s,
         args.width,
         args.height,
-        args.spp,
+        spp.spp,
         args.final_gather
     );
+    print_noise(&spp);
     let (cache_n, cache_s) = (stats.cache_entries, stats.cache_build_s);
     println!(
         "{samples_per_s:.0} samples/s, lookups {:.3} s (thread sum), cache {cache_n} cells built in {cache_s:.3} s",
@@ -373,6 +398,23 @@ fn report(
     println!("wrote {}", args.out.display());
     if let Some(p) = &args.png {
         println!("wrote {}", p.display());
+    }
+}
+
+/// The `--spp auto` line of the text report.
+pub fn print_noise(spp: &SppOutcome) {
+    match spp.noise {
+        Some((n, true)) => println!(
+            "noise {:.2} % after {} spp (target reached)",
+            100.0 * n,
+            spp.spp
+        ),
+        Some((n, false)) => println!(
+            "noise {:.2} % after {} spp: --max-spp stopped it before --noise",
+            100.0 * n,
+            spp.spp
+        ),
+        None => {}
     }
 }
 

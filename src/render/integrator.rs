@@ -287,11 +287,16 @@ impl<'a> Ctx<'a> {
         sc: &mut SampleScratch,
     ) -> Vec3 {
         let mut l = Vec3::ZERO;
-        let first = if self.show_emitters { 0 } else { u32::MAX };
+        let first = if self.show_emitters || self.view == View::Emitters {
+            0
+        } else {
+            u32::MAX
+        };
         let Some(s) = self.trace(ray, first, rng, &mut l) else {
             return l;
         };
         let local = match (self.view, self.maps) {
+            (View::Emitters, _) => Vec3::ZERO,
             (View::DirectOnly, _) => self.direct(&s, px),
             (View::Map { primary_only }, Some(m)) => {
                 let map = if primary_only { &m.primary } else { &m.full };

@@ -65,6 +65,8 @@
 //!
 //! # Diagnostic views
 //! [`View::DirectOnly`]: emission and direct light, no map.
+//! [`View::Emitters`]: the emission the camera sees (through mirrors and
+//! glass too), nothing else.
 //! [`View::Map`]: emission and the map's radiance estimate at the first
 //! non-delta hit, no light sampling, no gather: the full map, or with
 //! `primary_only` the depth-0 photons (the paper's primary map).
@@ -96,6 +98,7 @@ pub mod metrics;
 pub mod path;
 mod path_light;
 mod path_render;
+pub mod progressive;
 mod quadrature;
 mod run;
 pub mod sampler;
@@ -113,8 +116,11 @@ pub use path::{Integrator, PathPart, PathTracer};
 pub use path_render::{
     indirect_irradiance, light_pixels, render_path, render_path_with, specular_pixels, PathHalves,
 };
+pub use progressive::{render_to_noise, NoiseTarget, Progressive, Round};
 pub use quadrature::{floor_points, quadrature_irradiance, unshadowed_irradiance};
-pub use run::{render, render_checked, render_with, RenderStats};
+pub use run::{
+    add_seen_emission, render, render_checked, render_progressive, render_with, RenderStats,
+};
 
 use crate::error::{Error, Result};
 use crate::scene::{Camera, Scene};
@@ -137,6 +143,13 @@ impl CheckedRender {
     pub fn with_seed(&self, seed: u64) -> Self {
         let mut c = self.clone();
         c.0.seed = seed;
+        c
+    }
+
+    /// The same settings with the emitters hidden ([`RenderConfig::show_emitters`] off).
+    pub fn without_emitters(&self) -> Self {
+        let mut c = self.clone();
+        c.0.show_emitters = false;
         c
     }
 }
@@ -189,6 +202,11 @@ pub enum View {
         /// Use only the depth-0 photons (the paper's primary map).
         primary_only: bool,
     },
+    /// Emission the camera sees, directly or through mirrors and glass,
+    /// and nothing else; no photon map needed. `--spp auto` adds it to an
+    /// image rendered without it, so that the aliasing of a light's edges
+    /// stays out of the noise it measures.
+    Emitters,
 }
 
 /// How to render.
@@ -265,7 +283,7 @@ impl RenderConfig {
         match self.view {
             View::Map { primary_only } => primary_only,
             View::Full => self.final_gather == 0,
-            View::DirectOnly => false,
+            View::DirectOnly | View::Emitters => false,
         }
     }
 

@@ -8,6 +8,8 @@ use super::direct::LightSampler;
 use super::estimate::Lookup;
 use super::film::{self, PixelEstimator, Sample};
 use super::integrator::{Ctx, SampleScratch};
+use super::path_render::light_pixels;
+use super::progressive::{render_to_noise, NoiseTarget, Progressive, Round};
 use super::sampler::{dim, PixelSampler};
 use super::CAUSTIC_RADIUS_FRACTION;
 use super::{
@@ -96,8 +98,104 @@ pub fn render_checked<C: RayCaster>(
     render_photons(scene, rt, maps, cache, cfg, progress)
 }
 
+/// The irradiance cache the settings ask for (`cache_stride > 0`, a gather,
+/// the full view), built from `maps.full`; `None` when they ask for none.
+fn cache_for(
+    scene: &Scene,
+    rt: &dyn RayCaster,
+    maps: Option<&RenderMaps>,
+    cfg: &CheckedRender,
+) -> Result<Option<IrradianceCache>> {
+    match maps {
+        Some(m) if cfg.cache_stride > 0 && cfg.final_gather > 0 && cfg.view == View::Full => {
+            let c = CacheConfig {
+                stride: cfg.cache_stride,
+                lookup: lookup_of(scene, cfg),
+            };
+            Ok(Some(IrradianceCache::build_in(&m.full, scene, rt, &c)?))
+        }
+        _ => Ok(None),
+    }
+}
+
+fn lookup_of(scene: &Scene, cfg: &CheckedRender) -> Lookup {
+    Lookup {
+        k: cfg.k,
+        max_radius: cfg.max_radius.unwrap_or_else(|| default_max_radius(scene)),
+    }
+}
+
+/// [`render_checked`] in rounds of two independent halves until the image's
+/// own noise over the pixels that are not a light's reaches `target`
+/// ([`super::progressive`]). The irradiance cache, when the settings ask for
+/// one, is built once and read by every round; `progress(rows_done,
+/// rows_total)` follows each half-round's rows, `on_round` each round. The
+/// stats sum every round's.
+///
+/// # Errors
+/// As [`render`], and for a bad `target`.
+pub fn render_progressive<C: RayCaster>(
+    prepared: &PreparedScene<C>,
+    maps: Option<&RenderMaps>,
+    cfg: &CheckedRender,
+    target: &NoiseTarget,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    on_round: &mut dyn FnMut(&Round),
+) -> Result<(Progressive, RenderStats)> {
+    target.validate()?;
+    let (scene, rt) = (prepared.scene(), prepared.caster());
+    check_maps(cfg, maps)?;
+    let keep: Vec<bool> = light_pixels(prepared, cfg)?.iter().map(|l| !l).collect();
+    let cache = cache_for(scene, rt, maps, cfg)?;
+    let mut stats = RenderStats::default();
+    let mut half = |c: &CheckedRender| {
+        let (image, s) = render_photons(scene, rt, maps, cache.as_ref(), c, progress)?;
+        stats.add(&s);
+        Ok(image)
+    };
+    let mut p = render_to_noise(&cfg.without_emitters(), target, &keep, &mut half, on_round)?;
+    if let Some(c) = &cache {
+        stats.cache_build_s = c.build_s;
+    }
+    add_seen_emission(prepared, cfg, p.spp, &mut p.image)?;
+    Ok((p, stats))
+}
+
+/// When `cfg.show_emitters`, adds to `image` (rendered with the emitters
+/// hidden) the emission the camera sees, [`View::Emitters`] at `spp`
+/// samples per pixel: the light's edges anti-aliased, kept out of a noise
+/// estimate they would dominate.
+///
+/// # Errors
+/// As [`render`]; a size other than `cfg`'s.
+pub fn add_seen_emission<C: RayCaster>(
+    prepared: &PreparedScene<C>,
+    cfg: &CheckedRender,
+    spp: u32,
+    image: &mut Image,
+) -> Result<()> {
+    if !cfg.show_emitters {
+        return Ok(());
+    }
+    let mut c: RenderConfig = (**cfg).clone();
+    c.view = View::Emitters;
+    c.spp = spp;
+    c.seed = crate::rng::hash2(cfg.seed, 0xE417);
+    let (seen, _) = render_checked(prepared, None, None, &c.check()?, &|_, _| {})?;
+    if seen.pixels.len() != image.pixels.len() {
+        return Err(Error::param(
+            "image",
+            "the emission's size differs from the image's",
+        ));
+    }
+    for (p, e) in image.pixels.iter_mut().zip(&seen.pixels) {
+        *p += *e;
+    }
+    Ok(())
+}
+
 fn check_maps(cfg: &RenderConfig, maps: Option<&RenderMaps>) -> Result<()> {
-    if maps.is_none() && cfg.view != View::DirectOnly {
+    if maps.is_none() && !matches!(cfg.view, View::DirectOnly | View::Emitters) {
         return Err(Error::param(
             "photon map",
             "this view reads the photon map; pass one or use the direct-only view",
@@ -126,22 +224,11 @@ fn render_photons(
     check_maps(cfg, maps)?;
     let checked = CheckedCaster::new(scene, rt);
     let rt: &dyn RayCaster = &checked;
-    let max_radius = cfg.max_radius.unwrap_or_else(|| default_max_radius(scene));
-    let lookup = Lookup {
-        k: cfg.k,
-        max_radius,
-    };
-    let built = match (cache, maps) {
-        (None, Some(m))
-            if cfg.cache_stride > 0 && cfg.final_gather > 0 && cfg.view == View::Full =>
-        {
-            let c = CacheConfig {
-                stride: cfg.cache_stride,
-                lookup,
-            };
-            Some(IrradianceCache::build_in(&m.full, scene, rt, &c)?)
-        }
-        _ => None,
+    let lookup = lookup_of(scene, cfg);
+    let max_radius = lookup.max_radius;
+    let built = match cache {
+        None => cache_for(scene, rt, maps, cfg)?,
+        Some(_) => None,
     };
     let cache = cache.or(built.as_ref());
     let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
@@ -193,6 +280,22 @@ fn render_photons(
         dropped_samples: dropped,
     };
     Ok((image, stats))
+}
+
+impl RenderStats {
+    /// Adds another render's counts and times (the cache's size and build
+    /// time are one cache's: taken from `other` when this has none).
+    fn add(&mut self, other: &RenderStats) {
+        self.samples += other.samples;
+        self.lookup_s += other.lookup_s;
+        self.cache_hits += other.cache_hits;
+        self.cache_misses += other.cache_misses;
+        self.dropped_samples += other.dropped_samples;
+        if self.cache_entries == 0 {
+            self.cache_entries = other.cache_entries;
+            self.cache_bytes_per_entry = other.cache_bytes_per_entry;
+        }
+    }
 }
 
 /// The photon render's estimator ([`Ctx::radiance`]) in the image loop, with

@@ -217,3 +217,47 @@ fn a_scene_in_the_working_folder_reads_its_buffer() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
 }
+
+/// `--spp auto` (the default) reports the spp it reached and its noise; its
+/// options are refused where they cannot apply.
+#[test]
+fn render_spp_auto_reports_its_noise_and_refuses_what_cannot_apply() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.exr");
+    let out = out.to_str().unwrap();
+    let small = ["--width", "16", "--height", "16", "--n-max", "2000"];
+    let args = [
+        &[
+            "render", "cornell", "--json", "--noise", "0.2", "--out", out,
+        ][..],
+        &small,
+    ]
+    .concat();
+    let v = json(&args);
+    let spp = v["spp"].as_u64().unwrap();
+    assert!((8..=1024).contains(&spp), "{v}");
+    let noise = v["noise_estimate"].as_f64().unwrap();
+    assert_eq!(v["noise_target_reached"], noise <= 0.2, "{v}");
+    let fixed = [
+        &["render", "cornell", "--json", "--spp", "3", "--out", out][..],
+        &small,
+    ]
+    .concat();
+    let v = json(&fixed);
+    assert_eq!(v["spp"], 3);
+    assert!(v["noise_estimate"].is_null());
+    for (extra, needle) in [
+        (vec!["--spp", "0"], "--spp"),
+        (vec!["--spp", "many"], "auto"),
+        (vec!["--noise", "1.5"], "noise target"),
+        (vec!["--noise", "0"], "noise target"),
+        (vec!["--max-spp", "4"], "max spp"),
+        (vec!["--spp", "8", "--noise", "0.1"], "--spp auto"),
+        (vec!["--tile", "0/2"], "--tile needs a fixed --spp"),
+    ] {
+        let args = [&["render", "cornell", "--out", out][..], &small, &extra].concat();
+        let (code, _, err) = run(&args);
+        assert_ne!(code, 0, "{args:?}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+}

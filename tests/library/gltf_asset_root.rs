@@ -5,6 +5,7 @@
 //! points out of it, is refused naming the URI and the root; the scene file
 //! must lie inside the root.
 
+use crate::gltf_textures::png_rgb;
 use adaptive_pm::error::Error;
 use adaptive_pm::scene::{LoadOptions, Scene};
 use serde_json::{json, Value};
@@ -147,14 +148,7 @@ fn a_symbolic_link_out_of_the_root_is_refused() {
 fn an_image_in_a_sibling_folder_is_read_inside_the_root() {
     let dir = tempfile::tempdir().unwrap();
     let (root, scene) = asset_tree(dir.path(), "../buffers/geo.bin");
-    let mut png = Vec::new();
-    let mut enc = png::Encoder::new(&mut png, 1, 1);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    enc.write_header()
-        .unwrap()
-        .write_image_data(&[255; 3])
-        .unwrap();
+    let png = png_rgb(1, 1, &[[255; 3]]);
     std::fs::write(root.join("textures/white.png"), &png).unwrap();
     let uv = [[0.0f32, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
     let uv_bytes: Vec<u8> = uv.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();

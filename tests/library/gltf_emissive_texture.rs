@@ -8,6 +8,7 @@
 //! `(0, 0)` at `(x, z) = (-0.5, -0.5)`, `u` along x and `v` along z; the
 //! floor, when present, a 4 x 4 matte square at y = 0.
 
+use crate::gltf_textures::png_rgb;
 use adaptive_pm::embree::{thread_pool, Device, EmbreeScene};
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, TraceOutput, Tracer};
 use adaptive_pm::photon_map::PhotonRecord;
@@ -32,17 +33,6 @@ const LINEAR_CLAMP: &str = r#"{"magFilter": 9729, "wrapS": 33071, "wrapT": 33071
 const NEAREST_MIRROR: &str = r#"{"magFilter": 9728, "wrapS": 33648, "wrapT": 33648}"#;
 const LINEAR_REPEAT: &str = r#"{"magFilter": 9729}"#;
 const FLOOR_ALBEDO: f64 = 0.5;
-
-/// An 8-bit RGB PNG of `w x h` pixels, rows from the top.
-fn png_rgb(w: u32, h: u32, rgb: &[[u8; 3]]) -> Vec<u8> {
-    let mut out = Vec::new();
-    let mut enc = png::Encoder::new(&mut out, w, h);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    let data: Vec<u8> = rgb.iter().flatten().copied().collect();
-    enc.write_header().unwrap().write_image_data(&data).unwrap();
-    out
-}
 
 /// sRGB's decoding (IEC 61966-2-1), written out here as the oracle.
 fn srgb(c: u8) -> f64 {

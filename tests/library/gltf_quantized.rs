@@ -5,6 +5,7 @@
 //! and lights its floor as the float scene does. Storage the extension does
 //! not allow is refused naming the accessor.
 
+use crate::gltf_textures::png_rgb;
 use adaptive_pm::scene::Scene;
 use glam::Vec3;
 use serde_json::{json, Value};
@@ -384,19 +385,6 @@ fn storage_the_extension_does_not_allow_is_refused_naming_the_accessor() {
     }
 }
 
-/// A 1 x 1 white PNG.
-fn white_png() -> Vec<u8> {
-    let mut out = Vec::new();
-    let mut enc = png::Encoder::new(&mut out, 1, 1);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    enc.write_header()
-        .unwrap()
-        .write_image_data(&[255; 3])
-        .unwrap();
-    out
-}
-
 #[test]
 fn quantized_texture_coordinates_are_read_as_their_values() {
     // Per storage: the integers stored for the floor's five vertices, and
@@ -429,7 +417,7 @@ fn quantized_texture_coordinates_are_read_as_their_values() {
         };
         let mut doc = scene_doc(None, false);
         doc.extensions_used.push("KHR_mesh_quantization");
-        let texture = doc.texture(&white_png(), json!({}));
+        let texture = doc.texture(&png_rgb(1, 1, &[[255; 3]]), json!({}));
         doc.materials[0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": texture});
         let mut bytes = Vec::new();
         for uv in stored {

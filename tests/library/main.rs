@@ -50,6 +50,7 @@ mod photon_density;
 mod raycast;
 mod render;
 mod render_cache;
+mod render_progressive;
 mod scene_load;
 mod shards;
 mod sweep;
