@@ -20,6 +20,7 @@ mod caustic_runs;
 mod cornell_empty;
 mod cornell_rays;
 mod dielectric;
+mod door_scene;
 mod directional_light;
 mod embree_wrapper;
 mod engine;
