@@ -96,6 +96,7 @@ pub mod path;
 mod path_light;
 mod path_render;
 mod quadrature;
+pub mod reads;
 mod run;
 pub mod sampler;
 
@@ -113,7 +114,8 @@ pub use path_render::{
     indirect_irradiance, light_pixels, render_path, render_path_with, specular_pixels, PathHalves,
 };
 pub use quadrature::{floor_points, quadrature_irradiance, unshadowed_irradiance};
-pub use run::{render, render_checked, render_with, RenderStats};
+pub use reads::MapReads;
+pub use run::{render, render_checked, render_reading, render_with, RenderStats};
 
 use crate::error::{Error, Result};
 use crate::scene::{Camera, Scene};

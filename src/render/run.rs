@@ -8,6 +8,7 @@ use super::direct::LightSampler;
 use super::estimate::Lookup;
 use super::film::{self, PixelEstimator, Sample};
 use super::integrator::{Ctx, SampleScratch};
+use super::reads::MapReads;
 use super::sampler::{dim, PixelSampler};
 use super::CAUSTIC_RADIUS_FRACTION;
 use super::{
@@ -93,7 +94,24 @@ pub fn render_checked<C: RayCaster>(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Image, RenderStats)> {
     let (scene, rt) = (prepared.scene(), prepared.caster());
-    render_photons(scene, rt, maps, cache, cfg, progress)
+    render_photons(scene, rt, maps, cache, cfg, progress, None)
+}
+
+/// [`render_with`] (without a cache given: it builds its own when the
+/// settings ask for one) that marks every photon its lookups return in
+/// `reads`, for [`MapReads::share`]; the image is [`render`]'s, bit for
+/// bit. Slower than a plain render by the marking (see [`super::reads`]).
+///
+/// # Errors
+/// As [`render`].
+pub fn render_reading<C: RayCaster>(
+    prepared: &PreparedScene<C>,
+    reads: &MapReads,
+    cfg: &RenderConfig,
+) -> Result<(Image, RenderStats)> {
+    let (scene, rt) = (prepared.scene(), prepared.caster());
+    let maps = Some(reads.maps());
+    render_photons(scene, rt, maps, None, &cfg.check()?, &|_, _| {}, Some(reads))
 }
 
 fn check_maps(cfg: &RenderConfig, maps: Option<&RenderMaps>) -> Result<()> {
@@ -122,6 +140,7 @@ fn render_photons(
     cache: Option<&IrradianceCache>,
     cfg: &CheckedRender,
     progress: &(dyn Fn(u64, u64) + Sync),
+    reads: Option<&MapReads>,
 ) -> Result<(Image, RenderStats)> {
     check_maps(cfg, maps)?;
     let checked = CheckedCaster::new(scene, rt);
@@ -139,7 +158,7 @@ fn render_photons(
                 stride: cfg.cache_stride,
                 lookup,
             };
-            Some(IrradianceCache::build_in(&m.full, scene, rt, &c)?)
+            Some(IrradianceCache::build_in(&m.full, scene, rt, &c, reads)?)
         }
         _ => None,
     };
@@ -172,6 +191,7 @@ fn render_photons(
         },
         eps: ray_epsilon(scene),
         show_emitters: cfg.show_emitters,
+        reads,
     };
     let estimator = PhotonEstimator {
         ctx,
@@ -234,5 +254,8 @@ impl PixelEstimator for PhotonEstimator<'_> {
         self.lookup_ns.fetch_add(sc.lookup_ns, Ordering::Relaxed);
         self.hits.fetch_add(sc.hits, Ordering::Relaxed);
         self.misses.fetch_add(sc.misses, Ordering::Relaxed);
+        if let Some(reads) = self.ctx.reads {
+            reads.merge(&sc.reads);
+        }
     }
 }

@@ -49,6 +49,7 @@ mod photon_density;
 mod raycast;
 mod render;
 mod render_cache;
+mod render_reads;
 mod scene_load;
 mod shards;
 mod sweep;

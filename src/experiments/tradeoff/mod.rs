@@ -46,6 +46,15 @@
 //! and equal-memory comparisons interpolate each mode's mean indirect error
 //! log-log at one level per budget ([`summary`]).
 //!
+//! # The read share
+//! `read_share`: of the photons stored in the maps the renderer keeps, the
+//! fraction that at least one k-nearest lookup of the full render returns (a
+//! pixel's first-hit estimate, a gather ray's estimate on a cache miss, the
+//! irradiance cache's build estimates), each photon counted once however
+//! many maps hold it ([`crate::render::reads`]). The timed render is the one
+//! that marks them; marking costs a bit set per photon returned (a few
+//! per cent of the render, measured in docs/rendering.md).
+//!
 //! # The estimated error
 //! `estimated_rel_err` needs no reference: two extra traces at `N_MAX / 2`
 //! with independent seeds, the points' irradiance read from each,
@@ -194,6 +203,9 @@ pub struct Run {
     pub points_rel_err: f64,
     /// (c) estimated without a reference from two half-maps.
     pub estimated_rel_err: f64,
+    /// Share of the stored photons that some lookup of the full render
+    /// returned (see the module docs).
+    pub read_share: f64,
 }
 
 /// Everything the study measured.

@@ -9,6 +9,7 @@ use crate::error::Result;
 use crate::photon_map::{CompactPhoton, Neighbor, PhotonMap};
 use crate::raycast::{Ray, RayCaster};
 use crate::render::estimate::cone_filter;
+use crate::render::reads::MapReads;
 use crate::scene::{PreparedScene, Scene};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -27,7 +28,7 @@ impl IrradianceCache {
         prepared: &PreparedScene<C>,
         cfg: &CacheConfig,
     ) -> Result<Self> {
-        Self::build_in(full, prepared.scene(), prepared.caster(), cfg)
+        Self::build_in(full, prepared.scene(), prepared.caster(), cfg, None)
     }
 
     pub(crate) fn build_in(
@@ -35,6 +36,7 @@ impl IrradianceCache {
         scene: &Scene,
         rt: &dyn RayCaster,
         cfg: &CacheConfig,
+        reads: Option<&MapReads>,
     ) -> Result<Self> {
         cfg.validate()?;
         let (lo, hi) = scene.bounds();
@@ -78,6 +80,9 @@ impl IrradianceCache {
                     && c.direction_unnormalised().dot(n) <= 0.0
                     && (quant.position(c) - x).dot(n).abs() <= plane
             });
+            if let Some(reads) = reads {
+                reads.mark(full, scratch);
+            }
             let e = cone_filter(full, scratch, cfg.lookup, |_, power| power);
             (e.value * scale, e.radius)
         };
