@@ -88,7 +88,10 @@ mod tests {
         let mut seen = vec![false; recs.len()];
         for (slot, &r) in owners.iter().enumerate() {
             assert!(keep(&recs[r as usize]));
-            assert!(!std::mem::replace(&mut seen[r as usize], true), "record {r} twice");
+            assert!(
+                !std::mem::replace(&mut seen[r as usize], true),
+                "record {r} twice"
+            );
             assert_eq!(
                 key(&map.quant.encode(&recs[r as usize])),
                 key(map.compact(slot as u32))

@@ -4,6 +4,10 @@
 //! the irradiance cache's build estimates). A photon that no lookup
 //! returns costs memory and trace time and changes no pixel.
 //!
+//! The cache's build lookups are marked apart
+//! ([`MapReads::share_without_cache_build`]): the cache estimates a cell
+//! wherever a photon sample lies, seen or not, so they read most of any map.
+//!
 //! Opt-in ([`super::render_reading`]): a plain render carries no marks and
 //! pays one untaken branch per lookup. With marks, each image row keeps a
 //! bitset per map ([`RowReads`], no atomics in the hot loop), OR-ed into the
@@ -33,10 +37,12 @@ const FILTERS: [fn(&PhotonRecord) -> bool; MAPS] = [
 ];
 
 /// The marks of one render over `maps`: for each map, a bit per photon
-/// (tree order) set when a lookup returned it.
+/// (tree order) set when a pixel's or a gather ray's lookup returned it,
+/// and for the full map a bit set when the cache's build did.
 pub struct MapReads<'a> {
     maps: &'a RenderMaps,
     bits: [Vec<AtomicU64>; MAPS],
+    cache_build: Vec<AtomicU64>,
 }
 
 impl std::fmt::Debug for MapReads<'_> {
@@ -50,9 +56,14 @@ impl std::fmt::Debug for MapReads<'_> {
 impl<'a> MapReads<'a> {
     /// No photon read yet.
     pub fn new(maps: &'a RenderMaps) -> Self {
-        let words = |m: &PhotonMap| (0..m.len().div_ceil(64)).map(|_| AtomicU64::new(0)).collect();
+        let words = |m: &PhotonMap| {
+            (0..m.len().div_ceil(64))
+                .map(|_| AtomicU64::new(0))
+                .collect()
+        };
         MapReads {
             maps,
+            cache_build: words(&maps.full),
             bits: [
                 words(&maps.full),
                 words(&maps.primary),
@@ -77,12 +88,13 @@ impl<'a> MapReads<'a> {
         self.all().iter().position(|m| std::ptr::eq(*m, map))
     }
 
-    /// Marks the photons of `found`, returned by a lookup in `map`.
-    pub(crate) fn mark(&self, map: &PhotonMap, found: &[Neighbor]) {
-        if let Some(w) = self.which(map) {
+    /// Marks the photons of `found`, returned by one of the irradiance
+    /// cache's build lookups in `map` (the full map).
+    pub(crate) fn mark_cache_build(&self, map: &PhotonMap, found: &[Neighbor]) {
+        if self.which(map) == Some(0) {
             for n in found {
                 let i = n.index as usize;
-                self.bits[w][i / 64].fetch_or(1 << (i % 64), Ordering::Relaxed);
+                self.cache_build[i / 64].fetch_or(1 << (i % 64), Ordering::Relaxed);
             }
         }
     }
@@ -98,29 +110,47 @@ impl<'a> MapReads<'a> {
         }
     }
 
-    /// Photons of each map (full, primary, indirect, caustic) read so far.
-    pub fn read_counts(&self) -> [usize; MAPS] {
-        self.bits.each_ref().map(|b| {
+    /// Photons of each map (full, primary, indirect, caustic) that a
+    /// pixel's or a gather ray's lookup read so far, and of the full map
+    /// that the cache's build read.
+    pub fn read_counts(&self) -> ([usize; MAPS], usize) {
+        let count = |b: &Vec<AtomicU64>| {
             b.iter()
                 .map(|w| w.load(Ordering::Relaxed).count_ones() as usize)
                 .sum()
-        })
+        };
+        (self.bits.each_ref().map(count), count(&self.cache_build))
     }
 
-    /// The share of the stored records that some lookup read: records read
-    /// through any map over the full map's photons (every valid record); 0
-    /// for an empty map.
+    /// The share of the stored records that some lookup read, the cache's
+    /// build included: records read through any map over the full map's
+    /// photons (every valid record); 0 for an empty map.
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] when the maps were not built by
     /// [`RenderMaps::build`] from `records`.
     pub fn share(&self, records: &[PhotonRecord]) -> Result<f64> {
+        self.share_of(records, true)
+    }
+
+    /// [`MapReads::share`] without the cache's build lookups: the photons
+    /// that pixels and gather rays read themselves.
+    ///
+    /// # Errors
+    /// As [`MapReads::share`].
+    pub fn share_without_cache_build(&self, records: &[PhotonRecord]) -> Result<f64> {
+        self.share_of(records, false)
+    }
+
+    fn share_of(&self, records: &[PhotonRecord], with_build: bool) -> Result<f64> {
         let total = self.maps.full.len();
         if total == 0 {
             return Ok(0.0);
         }
         let mut read = vec![false; records.len()];
-        for ((map, bits), keep) in self.all().into_iter().zip(&self.bits).zip(FILTERS) {
+        let maps = self.all().into_iter().zip(&self.bits).zip(FILTERS);
+        let build = with_build.then_some(((&self.maps.full, &self.cache_build), FILTERS[0]));
+        for ((map, bits), keep) in maps.chain(build) {
             if map.is_empty() {
                 continue;
             }

@@ -111,7 +111,15 @@ pub fn render_reading<C: RayCaster>(
 ) -> Result<(Image, RenderStats)> {
     let (scene, rt) = (prepared.scene(), prepared.caster());
     let maps = Some(reads.maps());
-    render_photons(scene, rt, maps, None, &cfg.check()?, &|_, _| {}, Some(reads))
+    render_photons(
+        scene,
+        rt,
+        maps,
+        None,
+        &cfg.check()?,
+        &|_, _| {},
+        Some(reads),
+    )
 }
 
 fn check_maps(cfg: &RenderConfig, maps: Option<&RenderMaps>) -> Result<()> {

@@ -30,8 +30,14 @@ fn light_box(scene: &Scene) -> (Vec3, Vec3) {
         .iter()
         .find(|m| scene.materials()[m.material].emission.is_some())
         .unwrap();
-    let lo = light.positions.iter().fold(Vec3::INFINITY, |a, &p| a.min(p));
-    let hi = light.positions.iter().fold(Vec3::NEG_INFINITY, |a, &p| a.max(p));
+    let lo = light
+        .positions
+        .iter()
+        .fold(Vec3::INFINITY, |a, &p| a.min(p));
+    let hi = light
+        .positions
+        .iter()
+        .fold(Vec3::NEG_INFINITY, |a, &p| a.max(p));
     (lo, hi)
 }
 
@@ -70,9 +76,16 @@ fn door_is_a_built_in_of_closed_diffuse_boxes() {
     for i in 0..20_000 {
         let (x0, x1) = rooms[i % 2];
         let [u, v] = rng.next_2d();
-        let o = Vec3::new(x0 + u * (x1 - x0), 5.0 + 250.0 * v, 5.0 + 390.0 * rng.next_f32());
+        let o = Vec3::new(
+            x0 + u * (x1 - x0),
+            5.0 + 250.0 * v,
+            5.0 + 390.0 * rng.next_f32(),
+        );
         let d = random_direction(&mut rng);
-        assert!(rt.intersect(&Ray::new(o, d)).is_some(), "escaped from {o} along {d}");
+        assert!(
+            rt.intersect(&Ray::new(o, d)).is_some(),
+            "escaped from {o} along {d}"
+        );
     }
 }
 
@@ -145,7 +158,11 @@ fn light_reaches_the_camera_room_in_both_renderers() {
         .records();
     let in_a = records.iter().filter(|r| r.position.x < WALL_X.0).count();
     eprintln!("{in_a} of {} photons stored in room A", records.len());
-    assert!(in_a > 0 && in_a * 4 < records.len(), "{in_a} of {}", records.len());
+    assert!(
+        in_a > 0 && in_a * 4 < records.len(),
+        "{in_a} of {}",
+        records.len()
+    );
     let maps = RenderMaps::build(&records);
     let mut rc = RenderConfig::new(16, 16);
     rc.spp = 4;
@@ -195,7 +212,10 @@ fn stored_flux_is_the_light_power_and_the_albedos_bound_its_bounces() {
         let records = tracer.trace(&cfg).unwrap().records();
         let (f0, f1) = (flux_at(&records, 0), flux_at(&records, 1));
         let rel = (f0 / power - Vec3::ONE).abs().max_element();
-        assert!(rel < 1.0 / 256.0, "first-hit flux {f0} against power {power}");
+        assert!(
+            rel < 1.0 / 256.0,
+            "first-hit flux {f0} against power {power}"
+        );
         ratios.push(f1 / f0);
     }
     let mean = ratios.iter().copied().sum::<Vec3>() / seeds as f32;

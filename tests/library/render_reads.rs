@@ -33,8 +33,9 @@ fn photons(n: usize, on_floor: bool, seed: u64) -> Vec<PhotonRecord> {
 }
 
 /// The read share of a render of `records` at 16 x 16 with `k` photons per
-/// lookup and no bound on the kernel radius.
-fn share(records: &[PhotonRecord], k: usize, gather: u32) -> f64 {
+/// lookup and no bound on the kernel radius, with and without the cache's
+/// build lookups.
+fn shares(records: &[PhotonRecord], k: usize, gather: u32) -> (f64, f64) {
     let device = Device::new().unwrap();
     let prepared = Scene::open(BUILTIN_CORNELL_EMPTY)
         .unwrap()
@@ -48,7 +49,17 @@ fn share(records: &[PhotonRecord], k: usize, gather: u32) -> f64 {
     rc.final_gather = gather;
     rc.max_radius = Some(1e3);
     render_reading(&prepared, &reads, &rc).unwrap();
-    reads.share(records).unwrap()
+    let all = reads.share(records).unwrap();
+    let pixels = reads.share_without_cache_build(records).unwrap();
+    assert!(pixels <= all, "{pixels} > {all}");
+    if gather == 0 {
+        assert_eq!(pixels, all, "no cache without a gather");
+    }
+    (all, pixels)
+}
+
+fn share(records: &[PhotonRecord], k: usize, gather: u32) -> f64 {
+    shares(records, k, gather).0
 }
 
 #[test]
@@ -98,15 +109,21 @@ fn marks_do_not_depend_on_threads_and_leave_the_image_alone() {
         pool.install(|| {
             let reads = MapReads::new(&maps);
             let (image, _) = render_reading(&prepared, &reads, &rc).unwrap();
-            (image, reads.read_counts(), reads.share(&records).unwrap())
+            let shares = (
+                reads.share(&records).unwrap(),
+                reads.share_without_cache_build(&records).unwrap(),
+            );
+            (image, reads.read_counts(), shares)
         })
     };
     let (one, two) = (run(1), run(2));
+    let (pixel_reads, build_reads) = one.1;
+    assert!(build_reads > 0 && pixel_reads.iter().sum::<usize>() > 0);
     assert_eq!(one.0.pixels, plain.pixels, "marking changes no pixel");
     assert_eq!(one.1, two.1, "marks per map");
     assert_eq!(one.2, two.2);
-    eprintln!("read share {} (per map {:?})", one.2, one.1);
-    assert!(one.2 > 0.0 && one.2 <= 1.0, "{}", one.2);
+    eprintln!("read shares {:?} (per map, cache build {:?})", one.2, one.1);
+    assert!(one.2 .1 > 0.0 && one.2 .1 <= one.2 .0 && one.2 .0 <= 1.0);
     // Records the maps were not built from are refused.
     assert!(reads_of_other_records_fail(&maps, &records));
 }

@@ -122,6 +122,7 @@ pub(crate) fn measure_run(
     let (full, _) = render_reading(prepared, &reads, &rc)?;
     let render_s = t.elapsed().as_secs_f64();
     let read_share = reads.share(&records)?;
+    let read_share_pixels = reads.share_without_cache_build(&records)?;
     rc.view = View::DirectOnly;
     let direct = render(prepared, Some(&maps), &rc)?;
     let mut indirect = full.clone();
@@ -146,6 +147,7 @@ pub(crate) fn measure_run(
         points_rel_err: rel_rmse(&points, &reference.irradiance),
         estimated_rel_err: estimated_error(prepared, mode, n_max, seed, &reference.points)?,
         read_share,
+        read_share_pixels,
     };
     Ok((
         run,

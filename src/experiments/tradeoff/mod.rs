@@ -51,9 +51,10 @@
 //! fraction that at least one k-nearest lookup of the full render returns (a
 //! pixel's first-hit estimate, a gather ray's estimate on a cache miss, the
 //! irradiance cache's build estimates), each photon counted once however
-//! many maps hold it ([`crate::render::reads`]). The timed render is the one
-//! that marks them; marking costs a bit set per photon returned (a few
-//! per cent of the render, measured in docs/rendering.md).
+//! many maps hold it ([`crate::render::reads`]). `read_share_pixels` leaves
+//! the cache's build out: the cache estimates a cell at every photon sample,
+//! seen or not, so with it nearly every photon is read. The timed render is
+//! the one that marks them (a bit set per photon returned).
 //!
 //! # The estimated error
 //! `estimated_rel_err` needs no reference: two extra traces at `N_MAX / 2`
@@ -206,6 +207,9 @@ pub struct Run {
     /// Share of the stored photons that some lookup of the full render
     /// returned (see the module docs).
     pub read_share: f64,
+    /// The same without the irradiance cache's build lookups: the photons
+    /// that pixels and gather rays read themselves.
+    pub read_share_pixels: f64,
 }
 
 /// Everything the study measured.

@@ -54,6 +54,8 @@ pub struct Group {
     pub points: Stat,
     /// Mean share of the stored photons that the render read.
     pub read_share: f64,
+    /// Mean share read by pixels and gather rays (the cache's build left out).
+    pub read_share_pixels: f64,
 }
 
 /// Bias/spread of samples (one vector per seed) against `r`, relative to `mean(r)`.
@@ -136,6 +138,7 @@ pub(crate) fn groups(
                     r.info.points_noise,
                 ),
                 read_share: avg(|r| r.read_share),
+                read_share_pixels: avg(|r| r.read_share_pixels),
             }
         })
         .collect()

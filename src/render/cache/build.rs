@@ -81,7 +81,7 @@ impl IrradianceCache {
                     && (quant.position(c) - x).dot(n).abs() <= plane
             });
             if let Some(reads) = reads {
-                reads.mark(full, scratch);
+                reads.mark_cache_build(full, scratch);
             }
             let e = cone_filter(full, scratch, cfg.lookup, |_, power| power);
             (e.value * scale, e.radius)
