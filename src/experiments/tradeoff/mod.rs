@@ -54,7 +54,8 @@
 //! many maps hold it ([`crate::render::reads`]). `read_share_pixels` leaves
 //! the cache's build out: the cache estimates a cell at every photon sample,
 //! seen or not, so with it nearly every photon is read. The timed render is
-//! the one that marks them (a bit set per photon returned).
+//! the one that marks them (a bit set per photon returned: +10-15 % of
+//! `render_s` in docs/rendering.md's paired runs).
 //!
 //! # The estimated error
 //! `estimated_rel_err` needs no reference: two extra traces at `N_MAX / 2`
