@@ -22,7 +22,7 @@ use glam::Vec3;
 #[derive(clap::Args, Debug)]
 pub struct AnalyzeArgs {
     /// A scene (glTF path, or a built-in: `cornell`, `cornell-empty`,
-    /// `cornell-glass`) whose emitters and BRDFs to analyse.
+    /// `cornell-glass`, `door`) whose emitters and BRDFs to analyse.
     pub scene: Option<String>,
     #[command(flatten)]
     pub assets: AssetRootArgs,

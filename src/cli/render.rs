@@ -27,7 +27,8 @@ use std::time::Instant;
 pub struct RenderArgs {
     /// A glTF file (.gltf or .glb), or a built-in scene: `cornell` (the Cornell
     /// box), `cornell-empty` (without its blocks), `cornell-glass` (with a mirror
-    /// and a glass sphere instead).
+    /// and a glass sphere instead), `door` (two rooms, a door ajar, the light in
+    /// the room the camera does not see).
     pub scene: String,
     #[command(flatten)]
     pub assets: AssetRootArgs,

@@ -12,7 +12,8 @@ use super::common::AssetRootArgs;
 pub struct SceneArgs {
     /// A glTF file (.gltf or .glb), or a built-in scene: `cornell` (the Cornell
     /// box), `cornell-empty` (without its blocks), `cornell-glass` (with a mirror
-    /// and a glass sphere instead).
+    /// and a glass sphere instead), `door` (two rooms, a door ajar, the light in
+    /// the room the camera does not see).
     pub scene: String,
     #[command(flatten)]
     pub assets: AssetRootArgs,

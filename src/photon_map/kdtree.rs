@@ -280,7 +280,7 @@ fn grid_bounds((lo, hi): &FieldBounds) -> [[f32; 3]; 2] {
     [coords(lo), coords(hi)]
 }
 
-fn is_valid(r: &PhotonRecord) -> bool {
+pub(super) fn is_valid(r: &PhotonRecord) -> bool {
     r.position.is_finite()
         && r.power.is_finite()
         && r.direction.is_finite()

@@ -16,6 +16,7 @@ use glam::Vec3;
 
 pub mod density;
 pub mod kdtree;
+mod owners;
 pub mod photon;
 pub mod query;
 mod stems;

@@ -86,6 +86,7 @@ impl<'a> CameraWalk<'a> {
             caustic_lookup: lookup,
             eps: ray_epsilon(scene),
             show_emitters: false,
+            reads: None,
         };
         CameraWalk {
             ctx,

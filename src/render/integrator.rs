@@ -5,6 +5,7 @@
 use super::cache::IrradianceCache;
 use super::direct::LightSampler;
 use super::estimate::{radiance_estimate, Lookup};
+use super::reads::{MapReads, RowReads};
 use super::sampler::{dim, PixelSampler};
 use super::{RenderMaps, View, MAX_SPECULAR};
 use crate::brdf::{Brdf, Transport};
@@ -35,6 +36,8 @@ pub(super) struct Ctx<'a> {
     pub(super) caustic_lookup: Lookup,
     pub(super) eps: f32,
     pub(super) show_emitters: bool,
+    /// Marks of the photons the lookups return, when asked for.
+    pub(super) reads: Option<&'a MapReads<'a>>,
 }
 /// One lookup in this many is timed, its time counted this many times: a
 /// clock read per lookup cost 3.5 % of a render (`__vdso_clock_gettime` in
@@ -49,6 +52,8 @@ pub(super) struct SampleScratch {
     pub(super) lookups: u64,
     pub(super) hits: u64,
     pub(super) misses: u64,
+    /// The row's marks (empty unless the render marks its reads).
+    pub(super) reads: RowReads,
 }
 
 impl SampleScratch {
@@ -59,6 +64,7 @@ impl SampleScratch {
             lookups: 0,
             hits: 0,
             misses: 0,
+            reads: RowReads::default(),
         }
     }
 
@@ -188,6 +194,9 @@ impl<'a> Ctx<'a> {
         )
         .value;
         sc.end_lookup(t);
+        if let Some(reads) = self.reads {
+            sc.reads.mark(reads, map, &sc.neighbors);
+        }
         v
     }
 

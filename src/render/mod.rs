@@ -100,6 +100,7 @@ mod path_light;
 mod path_render;
 pub mod progressive;
 mod quadrature;
+pub mod reads;
 mod run;
 pub mod sampler;
 
@@ -118,8 +119,10 @@ pub use path_render::{
 };
 pub use progressive::{render_to_noise, NoiseTarget, Progressive, Round};
 pub use quadrature::{floor_points, quadrature_irradiance, unshadowed_irradiance};
+pub use reads::MapReads;
 pub use run::{
-    add_seen_emission, render, render_checked, render_progressive, render_with, RenderStats,
+    add_seen_emission, render, render_checked, render_progressive, render_reading, render_with,
+    RenderStats,
 };
 
 use crate::error::{Error, Result};

@@ -10,6 +10,7 @@ use super::film::{self, PixelEstimator, Sample};
 use super::integrator::{Ctx, SampleScratch};
 use super::path_render::light_pixels;
 use super::progressive::{render_to_noise, NoiseTarget, Progressive, Round};
+use super::reads::MapReads;
 use super::sampler::{dim, PixelSampler};
 use super::CAUSTIC_RADIUS_FRACTION;
 use super::{
@@ -95,7 +96,32 @@ pub fn render_checked<C: RayCaster>(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Image, RenderStats)> {
     let (scene, rt) = (prepared.scene(), prepared.caster());
-    render_photons(scene, rt, maps, cache, cfg, progress)
+    render_photons(scene, rt, maps, cache, cfg, progress, None)
+}
+
+/// [`render_with`] (without a cache given: it builds its own when the
+/// settings ask for one) that marks every photon its lookups return in
+/// `reads`, for [`MapReads::share`]; the image is [`render`]'s, bit for
+/// bit. Slower than a plain render by the marking (see [`super::reads`]).
+///
+/// # Errors
+/// As [`render`].
+pub fn render_reading<C: RayCaster>(
+    prepared: &PreparedScene<C>,
+    reads: &MapReads,
+    cfg: &RenderConfig,
+) -> Result<(Image, RenderStats)> {
+    let (scene, rt) = (prepared.scene(), prepared.caster());
+    let maps = Some(reads.maps());
+    render_photons(
+        scene,
+        rt,
+        maps,
+        None,
+        &cfg.check()?,
+        &|_, _| {},
+        Some(reads),
+    )
 }
 
 /// The irradiance cache the settings ask for (`cache_stride > 0`, a gather,
@@ -105,6 +131,7 @@ fn cache_for(
     rt: &dyn RayCaster,
     maps: Option<&RenderMaps>,
     cfg: &CheckedRender,
+    reads: Option<&MapReads>,
 ) -> Result<Option<IrradianceCache>> {
     match maps {
         Some(m) if cfg.cache_stride > 0 && cfg.final_gather > 0 && cfg.view == View::Full => {
@@ -112,7 +139,9 @@ fn cache_for(
                 stride: cfg.cache_stride,
                 lookup: lookup_of(scene, cfg),
             };
-            Ok(Some(IrradianceCache::build_in(&m.full, scene, rt, &c)?))
+            Ok(Some(IrradianceCache::build_in(
+                &m.full, scene, rt, &c, reads,
+            )?))
         }
         _ => Ok(None),
     }
@@ -146,10 +175,10 @@ pub fn render_progressive<C: RayCaster>(
     let (scene, rt) = (prepared.scene(), prepared.caster());
     check_maps(cfg, maps)?;
     let keep: Vec<bool> = light_pixels(prepared, cfg)?.iter().map(|l| !l).collect();
-    let cache = cache_for(scene, rt, maps, cfg)?;
+    let cache = cache_for(scene, rt, maps, cfg, None)?;
     let mut stats = RenderStats::default();
     let mut half = |c: &CheckedRender| {
-        let (image, s) = render_photons(scene, rt, maps, cache.as_ref(), c, progress)?;
+        let (image, s) = render_photons(scene, rt, maps, cache.as_ref(), c, progress, None)?;
         stats.add(&s);
         Ok(image)
     };
@@ -220,6 +249,7 @@ fn render_photons(
     cache: Option<&IrradianceCache>,
     cfg: &CheckedRender,
     progress: &(dyn Fn(u64, u64) + Sync),
+    reads: Option<&MapReads>,
 ) -> Result<(Image, RenderStats)> {
     check_maps(cfg, maps)?;
     let checked = CheckedCaster::new(scene, rt);
@@ -227,7 +257,7 @@ fn render_photons(
     let lookup = lookup_of(scene, cfg);
     let max_radius = lookup.max_radius;
     let built = match cache {
-        None => cache_for(scene, rt, maps, cfg)?,
+        None => cache_for(scene, rt, maps, cfg, reads)?,
         Some(_) => None,
     };
     let cache = cache.or(built.as_ref());
@@ -259,6 +289,7 @@ fn render_photons(
         },
         eps: ray_epsilon(scene),
         show_emitters: cfg.show_emitters,
+        reads,
     };
     let estimator = PhotonEstimator {
         ctx,
@@ -337,5 +368,8 @@ impl PixelEstimator for PhotonEstimator<'_> {
         self.lookup_ns.fetch_add(sc.lookup_ns, Ordering::Relaxed);
         self.hits.fetch_add(sc.hits, Ordering::Relaxed);
         self.misses.fetch_add(sc.misses, Ordering::Relaxed);
+        if let Some(reads) = self.ctx.reads {
+            reads.merge(&sc.reads);
+        }
     }
 }

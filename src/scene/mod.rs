@@ -82,6 +82,9 @@ pub const BUILTIN_CORNELL_EMPTY: &str = "cornell-empty";
 /// The empty Cornell box with a mirror sphere and a glass sphere.
 #[doc(hidden)]
 pub const BUILTIN_CORNELL_GLASS: &str = "cornell-glass";
+/// Veach's door scene: two rooms, a door ajar, the light in the unseen room.
+#[doc(hidden)]
+pub const BUILTIN_DOOR: &str = "door";
 
 /// The names of every built-in scene (`Scene::open` accepts each).
 #[cfg(feature = "gltf")]

@@ -12,7 +12,7 @@ use serde_json::json;
 /// Arguments of `bench render`.
 #[derive(clap::Args, Debug)]
 pub struct RenderBenchArgs {
-    /// `cornell`, `cornell-empty`, `cornell-glass` or a glTF file.
+    /// `cornell`, `cornell-empty`, `cornell-glass`, `door` or a glTF file.
     #[arg(default_value = "cornell")]
     pub scene: String,
     #[command(flatten)]

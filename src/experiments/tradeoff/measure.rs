@@ -8,7 +8,8 @@ use crate::engine::{Budget, Mode, TraceConfig, Tracer};
 use crate::error::Result;
 use crate::photon_map::PhotonMap;
 use crate::render::{
-    irradiance_estimate, relative_rmse_masked, render, Image, Lookup, RenderMaps, View,
+    irradiance_estimate, relative_rmse_masked, render, render_reading, Image, Lookup, MapReads,
+    RenderMaps, View,
 };
 use crate::rng::hash2;
 use crate::scene::SurfacePoint;
@@ -116,9 +117,12 @@ pub(crate) fn measure_run(
     let build_s = t.elapsed().as_secs_f64();
     let mut rc = cfg.render_config(cfg.spp, seed);
     rc.k = k;
+    let reads = MapReads::new(&maps);
     let t = Instant::now();
-    let full = render(prepared, Some(&maps), &rc)?;
+    let (full, _) = render_reading(prepared, &reads, &rc)?;
     let render_s = t.elapsed().as_secs_f64();
+    let read_share = reads.share(&records)?;
+    let read_share_pixels = reads.share_without_cache_build(&records)?;
     rc.view = View::DirectOnly;
     let direct = render(prepared, Some(&maps), &rc)?;
     let mut indirect = full.clone();
@@ -142,6 +146,8 @@ pub(crate) fn measure_run(
         image_rel_rmse: relative_rmse_masked(&full, &reference.full, &reference.keep)?,
         points_rel_err: rel_rmse(&points, &reference.irradiance),
         estimated_rel_err: estimated_error(prepared, mode, n_max, seed, &reference.points)?,
+        read_share,
+        read_share_pixels,
     };
     Ok((
         run,

@@ -46,6 +46,17 @@
 //! and equal-memory comparisons interpolate each mode's mean indirect error
 //! log-log at one level per budget ([`summary`]).
 //!
+//! # The read share
+//! `read_share`: of the photons stored in the maps the renderer keeps, the
+//! fraction that at least one k-nearest lookup of the full render returns (a
+//! pixel's first-hit estimate, a gather ray's estimate on a cache miss, the
+//! irradiance cache's build estimates), each photon counted once however
+//! many maps hold it ([`crate::render::reads`]). `read_share_pixels` leaves
+//! the cache's build out: the cache estimates a cell at every photon sample,
+//! seen or not, so with it nearly every photon is read. The timed render is
+//! the one that marks them (a bit set per photon returned: +10-15 % of
+//! `render_s` in docs/rendering.md's paired runs).
+//!
 //! # The estimated error
 //! `estimated_rel_err` needs no reference: two extra traces at `N_MAX / 2`
 //! with independent seeds, the points' irradiance read from each,
@@ -194,6 +205,12 @@ pub struct Run {
     pub points_rel_err: f64,
     /// (c) estimated without a reference from two half-maps.
     pub estimated_rel_err: f64,
+    /// Share of the stored photons that some lookup of the full render
+    /// returned (see the module docs).
+    pub read_share: f64,
+    /// The same without the irradiance cache's build lookups: the photons
+    /// that pixels and gather rays read themselves.
+    pub read_share_pixels: f64,
 }
 
 /// Everything the study measured.

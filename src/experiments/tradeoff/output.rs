@@ -46,11 +46,11 @@ pub fn write_outputs(r: &TradeoffResults, dir: &Path) -> Result<()> {
         "tradeoff.json",
         serde_json::to_string_pretty(&to_json(r)).unwrap_or_default(),
     )?;
-    let mut csv = String::from("scene,mode,quality,n_max,seed,photons,k,trace_s,build_s,render_s,time_s,map_bytes,indirect_rel_rmse,image_rel_rmse,points_rel_err,estimated_rel_err\n");
+    let mut csv = String::from("scene,mode,quality,n_max,seed,photons,k,trace_s,build_s,render_s,time_s,map_bytes,indirect_rel_rmse,image_rel_rmse,points_rel_err,estimated_rel_err,read_share,read_share_pixels\n");
     for x in &r.runs {
         let _ = writeln!(
             csv,
-            "{},{},{:.6},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{},{:.6},{:.6},{:.6},{:.6}",
+            "{},{},{:.6},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
             r.scene,
             x.mode.name(),
             x.quality,
@@ -66,15 +66,17 @@ pub fn write_outputs(r: &TradeoffResults, dir: &Path) -> Result<()> {
             x.indirect_rel_rmse,
             x.image_rel_rmse,
             x.points_rel_err,
-            x.estimated_rel_err
+            x.estimated_rel_err,
+            x.read_share,
+            x.read_share_pixels
         );
     }
     write("runs.csv", csv)?;
-    let mut csv = String::from("scene,mode,quality,n_max,time_s,map_bytes,indirect_mean,indirect_bias,indirect_spread,image_mean,image_bias,image_spread,points_mean,points_bias,points_spread\n");
+    let mut csv = String::from("scene,mode,quality,n_max,time_s,map_bytes,indirect_mean,indirect_bias,indirect_spread,image_mean,image_bias,image_spread,points_mean,points_bias,points_spread,read_share,read_share_pixels\n");
     for g in &r.groups {
         let _ = writeln!(
             csv,
-            "{},{},{:.6},{},{:.4},{:.0},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
+            "{},{},{:.6},{},{:.4},{:.0},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
             r.scene,
             g.mode.name(),
             g.quality,
@@ -89,7 +91,9 @@ pub fn write_outputs(r: &TradeoffResults, dir: &Path) -> Result<()> {
             g.image.spread,
             g.points.mean,
             g.points.bias,
-            g.points.spread
+            g.points.spread,
+            g.read_share,
+            g.read_share_pixels
         );
     }
     write("groups.csv", csv)?;
@@ -213,7 +217,7 @@ pub fn summary_text(r: &TradeoffResults) -> String {
     );
     let _ = writeln!(
         s,
-        "{:>9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>7} {:>8} {:>7} {:>7}",
+        "{:>9} {:>8} {:>8} {:>10} {:>8} {:>7} {:>7} {:>8} {:>7} {:>7} {:>6} {:>6}",
         "mode",
         "N_MAX",
         "time s",
@@ -223,12 +227,14 @@ pub fn summary_text(r: &TradeoffResults) -> String {
         "spread",
         "points",
         "bias",
-        "spread"
+        "spread",
+        "read",
+        "px"
     );
     for g in &r.groups {
         let _ = writeln!(
             s,
-            "{:>9} {:>8} {:>8.3} {:>10.0} {:>8.4} {:>7.4} {:>7.4} {:>8.4} {:>7.4} {:>7.4}",
+            "{:>9} {:>8} {:>8.3} {:>10.0} {:>8.4} {:>7.4} {:>7.4} {:>8.4} {:>7.4} {:>7.4} {:>6.3} {:>6.3}",
             g.mode.name(),
             g.n_max,
             g.time_s,
@@ -238,7 +244,9 @@ pub fn summary_text(r: &TradeoffResults) -> String {
             g.indirect.spread,
             g.points.mean,
             g.points.bias,
-            g.points.spread
+            g.points.spread,
+            g.read_share,
+            g.read_share_pixels
         );
     }
     let _ = writeln!(s, "equal time ({} threads):", r.threads);

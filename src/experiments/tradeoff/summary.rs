@@ -52,6 +52,10 @@ pub struct Group {
     pub image: Stat,
     /// (c) points.
     pub points: Stat,
+    /// Mean share of the stored photons that the render read.
+    pub read_share: f64,
+    /// Mean share read by pixels and gather rays (the cache's build left out).
+    pub read_share_pixels: f64,
 }
 
 /// Bias/spread of samples (one vector per seed) against `r`, relative to `mean(r)`.
@@ -133,6 +137,8 @@ pub(crate) fn groups(
                     &errs(|r| r.points_rel_err),
                     r.info.points_noise,
                 ),
+                read_share: avg(|r| r.read_share),
+                read_share_pixels: avg(|r| r.read_share_pixels),
             }
         })
         .collect()

@@ -9,6 +9,7 @@ use crate::error::Result;
 use crate::photon_map::{CompactPhoton, Neighbor, PhotonMap};
 use crate::raycast::{Ray, RayCaster};
 use crate::render::estimate::cone_filter;
+use crate::render::reads::{BuildReads, MapReads};
 use crate::scene::{PreparedScene, Scene};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -27,7 +28,7 @@ impl IrradianceCache {
         prepared: &PreparedScene<C>,
         cfg: &CacheConfig,
     ) -> Result<Self> {
-        Self::build_in(full, prepared.scene(), prepared.caster(), cfg)
+        Self::build_in(full, prepared.scene(), prepared.caster(), cfg, None)
     }
 
     pub(crate) fn build_in(
@@ -35,6 +36,7 @@ impl IrradianceCache {
         scene: &Scene,
         rt: &dyn RayCaster,
         cfg: &CacheConfig,
+        reads: Option<&MapReads>,
     ) -> Result<Self> {
         cfg.validate()?;
         let (lo, hi) = scene.bounds();
@@ -72,16 +74,24 @@ impl IrradianceCache {
         // sample is an estimate at an independent point: no bias from the
         // choice of points.
         let scale = stride as f32 / (stride - 1) as f32;
-        let estimate = |scratch: &mut Vec<Neighbor>, (x, n, _): (Vec3, Vec3, u64)| {
+        let scratch = || Scratch {
+            neighbors: Vec::with_capacity(cfg.lookup.k),
+            marks: reads.map(BuildReads::new),
+        };
+        let estimate = |sc: &mut Scratch, (x, n, _): (Vec3, Vec3, u64)| {
+            let scratch = &mut sc.neighbors;
             full.nearest_k_where(x, cfg.lookup.k, cfg.lookup.max_radius, scratch, |c| {
                 !is_sample(c)
                     && c.direction_unnormalised().dot(n) <= 0.0
                     && (quant.position(c) - x).dot(n).abs() <= plane
             });
+            if let Some(marks) = sc.marks.as_mut() {
+                marks.mark(full, scratch);
+            }
             let e = cone_filter(full, scratch, cfg.lookup, |_, power| power);
             (e.value * scale, e.radius)
         };
-        let cell = cell_side(&samples, &estimate, cfg, diagonal);
+        let cell = cell_side(&samples, &scratch, &estimate, cfg, diagonal);
         // Cell faces off the round coordinates that walls sit on (a floor at
         // y = 0 on a face would split its samples and lookups by the sign of
         // rounding errors): every level's faces are >= 0.14 h from 0.
@@ -106,10 +116,9 @@ impl IrradianceCache {
         let groups: Vec<&[(u64, u32)]> = fine.chunk_by(|a, b| a.0 == b.0).collect();
         let values: Vec<Vec3> = groups
             .par_iter()
-            .map_init(
-                || Vec::with_capacity(cfg.lookup.k),
-                |sc, g| estimate(sc, samples[Self::pick(&samples, g) as usize]).0,
-            )
+            .map_init(&scratch, |sc, g| {
+                estimate(sc, samples[Self::pick(&samples, g) as usize]).0
+            })
             .collect();
         cache.fill(&samples, &groups, &values);
         cache.build_s = t.elapsed().as_secs_f64();
@@ -157,26 +166,32 @@ impl IrradianceCache {
     }
 }
 
+/// A build task's lookup scratch and, when the render marks its reads, its
+/// marks ([`BuildReads`], merged when the task ends).
+struct Scratch<'r, 'a> {
+    neighbors: Vec<Neighbor>,
+    marks: Option<BuildReads<'r, 'a>>,
+}
+
 /// The finest cell's side: from the median kernel radius over a spread
 /// subset of the samples, sized so that a cell holds about
 /// [`SAMPLES_PER_CELL`] samples.
-fn cell_side<F>(
+fn cell_side<S, G, F>(
     samples: &[(Vec3, Vec3, u64)],
+    scratch: &G,
     estimate: &F,
     cfg: &CacheConfig,
     diagonal: f32,
 ) -> f32
 where
-    F: Fn(&mut Vec<Neighbor>, (Vec3, Vec3, u64)) -> (Vec3, f32) + Sync,
+    G: Fn() -> S + Sync,
+    F: Fn(&mut S, (Vec3, Vec3, u64)) -> (Vec3, f32) + Sync,
 {
     let probe_step = (samples.len() / 1024).max(1);
     let mut radii: Vec<f32> = samples
         .par_iter()
         .step_by(probe_step)
-        .map_init(
-            || Vec::with_capacity(cfg.lookup.k),
-            |sc, &s| estimate(sc, s).1,
-        )
+        .map_init(scratch, |sc, &s| estimate(sc, s).1)
         .collect();
     let mid = radii.len() / 2;
     let median = if radii.is_empty() {
