@@ -191,6 +191,17 @@ fn peaks_of(
         / n;
     let level = p.peak_variance_fraction as f64 * global;
     let min_samples = p.min_peak_fraction as f64 * drawn.max(values.len()) as f64;
+    let keep = |d: &[Vec3], a: &[f32], v: &[f32]| {
+        cluster::cluster(d, v, level)
+            .into_iter()
+            .filter(|g| g.len() as f64 >= min_samples)
+            .map(|g| peak(&g, d, a, v))
+            .collect::<Vec<_>>()
+    };
+    if dirs.iter().all(|d| d.z >= 0.0) {
+        // One side (every hemisphere's set): no copies.
+        return keep(dirs, phis, values);
+    }
     let (above, below): (Vec<usize>, Vec<usize>) = (0..dirs.len()).partition(|&i| dirs[i].z >= 0.0);
     [above, below]
         .into_iter()
@@ -199,11 +210,7 @@ fn peaks_of(
             let d: Vec<Vec3> = side.iter().map(|&i| dirs[i]).collect();
             let a: Vec<f32> = side.iter().map(|&i| phis[i]).collect();
             let v: Vec<f32> = side.iter().map(|&i| values[i]).collect();
-            cluster::cluster(&d, &v, level)
-                .into_iter()
-                .filter(|g| g.len() as f64 >= min_samples)
-                .map(|g| peak(&g, &d, &a, &v))
-                .collect::<Vec<_>>()
+            keep(&d, &a, &v)
         })
         .collect()
 }
