@@ -169,6 +169,19 @@ impl Directionality {
 /// all on one side, so it is unchanged). The diffuse level and the 10 % rule
 /// stay those of the whole set.
 pub fn find_peaks(dirs: &[Vec3], values: &[f32], drawn: usize, p: &AnalysisParams) -> Vec<Peak> {
+    let phis: Vec<f32> = dirs.iter().map(|&w| crate::sampling::phi_of(w)).collect();
+    peaks_of(dirs, &phis, values, drawn, p)
+}
+
+/// [`find_peaks`] with each direction's azimuth `phis[i] = phi_of(dirs[i])`
+/// given (the sampling computed them for the strata already).
+fn peaks_of(
+    dirs: &[Vec3],
+    phis: &[f32],
+    values: &[f32],
+    drawn: usize,
+    p: &AnalysisParams,
+) -> Vec<Peak> {
     let n = values.len().max(1) as f64;
     let mean = values.iter().map(|&v| v as f64).sum::<f64>() / n;
     let global = values
@@ -178,25 +191,34 @@ pub fn find_peaks(dirs: &[Vec3], values: &[f32], drawn: usize, p: &AnalysisParam
         / n;
     let level = p.peak_variance_fraction as f64 * global;
     let min_samples = p.min_peak_fraction as f64 * drawn.max(values.len()) as f64;
+    let keep = |d: &[Vec3], a: &[f32], v: &[f32]| {
+        cluster::cluster(d, v, level)
+            .into_iter()
+            .filter(|g| g.len() as f64 >= min_samples)
+            .map(|g| peak(&g, d, a, v))
+            .collect::<Vec<_>>()
+    };
+    if dirs.iter().all(|d| d.z >= 0.0) {
+        // One side (every hemisphere's set): no copies.
+        return keep(dirs, phis, values);
+    }
     let (above, below): (Vec<usize>, Vec<usize>) = (0..dirs.len()).partition(|&i| dirs[i].z >= 0.0);
     [above, below]
         .into_iter()
         .filter(|side| !side.is_empty())
         .flat_map(|side| {
             let d: Vec<Vec3> = side.iter().map(|&i| dirs[i]).collect();
+            let a: Vec<f32> = side.iter().map(|&i| phis[i]).collect();
             let v: Vec<f32> = side.iter().map(|&i| values[i]).collect();
-            cluster::cluster(&d, &v, level)
-                .into_iter()
-                .filter(|g| g.len() as f64 >= min_samples)
-                .map(|g| peak(&g, &d, &v))
-                .collect::<Vec<_>>()
+            keep(&d, &a, &v)
         })
         .collect()
 }
 
 /// A kept group's solid angle, mean value and mean direction.
-fn peak(group: &[u32], dirs: &[Vec3], values: &[f32]) -> Peak {
+fn peak(group: &[u32], dirs: &[Vec3], phis: &[f32], values: &[f32]) -> Peak {
     let d: Vec<Vec3> = group.iter().map(|&i| dirs[i as usize]).collect();
+    let mut a: Vec<f32> = group.iter().map(|&i| phis[i as usize]).collect();
     let mean_value = group
         .iter()
         .map(|&i| values[i as usize] as f64)
@@ -204,7 +226,7 @@ fn peak(group: &[u32], dirs: &[Vec3], values: &[f32]) -> Peak {
         / group.len() as f64;
     Peak {
         samples: group.len(),
-        solid_angle: solid_angle::solid_angle(&d),
+        solid_angle: solid_angle::solid_angle_at(&d, &mut a),
         mean_value: mean_value as f32,
         direction: d.iter().copied().sum::<Vec3>().normalize_or_zero(),
     }
@@ -223,7 +245,13 @@ fn paper(target: Target<'_>, est: Estimator, p: &AnalysisParams) -> Directionali
     let t = Instant::now();
     let (mut sum, mut first, mut start) = (0.0f64, None, 0);
     for &end in &set.set_ends {
-        let peaks = find_peaks(&set.dirs[start..end], &set.values[start..end], set.drawn, p);
+        let peaks = peaks_of(
+            &set.dirs[start..end],
+            &set.phis[start..end],
+            &set.values[start..end],
+            set.drawn,
+            p,
+        );
         start = end;
         let omega: f32 = peaks.iter().map(|pk| pk.solid_angle).sum();
         sum += (omega / domain.solid_angle()).clamp(p.alpha_min, 1.0) as f64;

@@ -48,6 +48,19 @@ impl Target<'_> {
         }
     }
 
+    /// A BRDF's [`Self::value`] and sampling pdf in direction `w`, in one
+    /// evaluation where the model has one (rough glass: the microfacet
+    /// normal is recovered once), the same bits as the two calls.
+    fn value_and_pdf(b: &Brdf, wi: Vec3, w: Vec3) -> (f32, f32) {
+        match b {
+            Brdf::RoughDielectric(d) => {
+                let (f, pdf) = d.eval_and_pdf(wi, w);
+                (luminance(f).max(0.0), pdf)
+            }
+            _ => (luminance(b.eval(wi, w)).max(0.0), b.pdf(wi, w)),
+        }
+    }
+
     fn sample(&self, u: [f32; 2]) -> Option<(Vec3, f32)> {
         match *self {
             Target::CosN(n) => Some((cos_power_hemisphere(n, u), 0.0)),
@@ -74,6 +87,9 @@ impl Target<'_> {
 pub struct SampleSet {
     /// Importance-sampled directions (failed samples are left out).
     pub dirs: Vec<Vec3>,
+    /// Azimuth of each direction in [0, 2 pi) ([`crate::sampling::phi_of`]),
+    /// computed once for the strata and the peaks' solid angles.
+    pub phis: Vec<f32>,
     /// The normalised function (unit integral, sr^-1) at each direction.
     pub values: Vec<f32>,
     /// Number of importance samples drawn per set (including failed ones).
@@ -152,11 +168,17 @@ pub fn stratum_centre(s: usize, p: &AnalysisParams) -> Vec3 {
 /// Equal-solid-angle stratum index of a direction in `domain`.
 #[inline]
 pub fn stratum_in(domain: Domain, w: Vec3, p: &AnalysisParams) -> usize {
+    stratum_at(domain, w.z, crate::sampling::phi_of(w), p)
+}
+
+/// [`stratum_in`] from `cos theta` and the azimuth `phi_of(w)`.
+#[inline]
+fn stratum_at(domain: Domain, cos_theta: f32, phi: f32, p: &AnalysisParams) -> usize {
     let (kc, kp) = (domain.bands(p), p.grid_phi);
     let lo = domain.lowest_cos();
-    let c = (w.z.clamp(lo, 1.0) - lo) / (1.0 - lo);
+    let c = (cos_theta.clamp(lo, 1.0) - lo) / (1.0 - lo);
     let i = ((c * kc as f32) as usize).min(kc - 1);
-    let j = ((crate::sampling::phi_of(w) / (2.0 * PI) * kp as f32) as usize).min(kp - 1);
+    let j = ((phi / (2.0 * PI) * kp as f32) as usize).min(kp - 1);
     i * kp + j
 }
 
@@ -262,10 +284,11 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
         set_ends.push(dirs.len());
     }
 
+    let phis: Vec<f32> = dirs.iter().map(|&w| crate::sampling::phi_of(w)).collect();
     let mut sum = vec![0.0f64; s_count];
     let mut cnt = vec![0u32; s_count];
-    for (w, &v) in dirs.iter().zip(&raw) {
-        let s = stratum_in(domain, *w, p);
+    for ((w, &phi), &v) in dirs.iter().zip(&phis).zip(&raw) {
+        let s = stratum_at(domain, w.z, phi, p);
         sum[s] += v as f64;
         cnt[s] += 1;
     }
@@ -295,8 +318,8 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
             let mut strata = Vec::with_capacity(s_count);
             for s in 0..s_count {
                 let c = stratum_centre_in(domain, s, p);
-                let v = target.value(c);
-                integral += v as f64 / (n as f64 * b.pdf(wi, c) as f64 + uniform);
+                let (v, pdf) = Target::value_and_pdf(b, wi, c);
+                integral += v as f64 / (n as f64 * pdf as f64 + uniform);
                 max_projected = max_projected.max(v * c.z.abs());
                 strata.push(if cnt[s] > 0 {
                     sum[s] / cnt[s] as f64
@@ -337,6 +360,7 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
     SampleSet {
         values: raw.iter().map(|&v| (v as f64 * inv) as f32).collect(),
         dirs,
+        phis,
         drawn: p.samples,
         set_ends,
         strata,

@@ -34,6 +34,13 @@ pub fn azimuth_arc(phis: &mut [f32]) -> f32 {
 
 /// Solid angle (sr) of the box of extreme spherical coordinates of `dirs`.
 pub fn solid_angle(dirs: &[Vec3]) -> f32 {
+    let mut phis: Vec<f32> = dirs.iter().map(|&d| phi_of(d)).collect();
+    solid_angle_at(dirs, &mut phis)
+}
+
+/// [`solid_angle`] with the azimuths `phis[i] = phi_of(dirs[i])` given
+/// (reordered: they are sorted in place).
+pub fn solid_angle_at(dirs: &[Vec3], phis: &mut [f32]) -> f32 {
     if dirs.is_empty() {
         return 0.0;
     }
@@ -49,8 +56,7 @@ pub fn solid_angle(dirs: &[Vec3]) -> f32 {
         vmin = vmin.min(versine);
         vmax = vmax.max(versine);
     }
-    let mut phis: Vec<f32> = dirs.iter().map(|&d| phi_of(d)).collect();
-    azimuth_arc(&mut phis) * (vmax - vmin).max(0.0)
+    azimuth_arc(phis) * (vmax - vmin).max(0.0)
 }
 
 #[cfg(test)]

@@ -30,6 +30,10 @@
 //! cells that hold the ball of radius `r_t` around the photon and nothing else:
 //! this test runs once per photon hit and is the method's whole cost, so it
 //! answers only this one fixed-radius question, not general k-nearest queries.
+//! A table slot holds a cell's key and its photons' array itself (32 bytes,
+//! two to a cache line), so a probe reaches the photons through one
+//! dependent load, where a key array, an index array and an array of cells
+//! took three.
 //!
 //! Photons are offered in the wave's deterministic order, so the result does
 //! not depend on the thread count. This pass is sequential.
@@ -50,15 +54,20 @@ struct Entry {
 
 const EMPTY: u64 = u64::MAX;
 
+/// `len` empty slots (an empty `Vec` allocates nothing).
+fn empty_table(len: usize) -> Vec<(u64, Vec<Entry>)> {
+    (0..len).map(|_| (EMPTY, Vec::new())).collect()
+}
+
 pub(super) struct DensityControl {
     origin: Vec3,
     inv_cell: f32,
     radius2: f32,
     k: usize,
-    /// Open addressing: packed cell key -> index into `cells`.
-    keys: Vec<u64>,
-    slots: Vec<u32>,
-    cells: Vec<Vec<Entry>>,
+    /// Open addressing: (packed cell key, the cell's photons).
+    table: Vec<(u64, Vec<Entry>)>,
+    /// Cells in use.
+    used: usize,
     records: Vec<PhotonRecord>,
     /// Same-side photons within the radius: (distance^2, index, depth, caustic).
     candidates: Vec<(f32, u32, u8, bool)>,
@@ -86,9 +95,8 @@ impl DensityControl {
             inv_cell: 1.0 / cell,
             radius2: radius * radius,
             k,
-            keys: vec![EMPTY; 1024],
-            slots: vec![0; 1024],
-            cells: Vec::new(),
+            table: empty_table(1024),
+            used: 0,
             records: Vec::new(),
             candidates: Vec::new(),
             rejected: 0,
@@ -114,9 +122,9 @@ impl DensityControl {
 
     /// Slot of `key`, or the empty slot where it would go.
     fn slot(&self, key: u64) -> usize {
-        let mask = self.keys.len() - 1;
+        let mask = self.table.len() - 1;
         let mut s = mix64(key) as usize & mask;
-        while self.keys[s] != key && self.keys[s] != EMPTY {
+        while self.table[s].0 != key && self.table[s].0 != EMPTY {
             s = (s + 1) & mask;
         }
         s
@@ -125,17 +133,16 @@ impl DensityControl {
     fn insert(&mut self, rec: &PhotonRecord) {
         let key = Self::key(self.cell_of(rec.position));
         let mut s = self.slot(key);
-        if self.keys[s] == EMPTY {
-            if (self.cells.len() + 1) * 2 > self.keys.len() {
+        if self.table[s].0 == EMPTY {
+            if (self.used + 1) * 2 > self.table.len() {
                 self.grow();
                 s = self.slot(key);
             }
-            self.keys[s] = key;
-            self.slots[s] = self.cells.len() as u32;
-            self.cells.push(Vec::new());
+            self.table[s].0 = key;
+            self.used += 1;
         }
         let index = self.records.len() as u32;
-        self.cells[self.slots[s] as usize].push(Entry {
+        self.table[s].1.push(Entry {
             position: rec.position,
             direction: rec.direction,
             index,
@@ -146,14 +153,12 @@ impl DensityControl {
     }
 
     fn grow(&mut self) {
-        let len = self.keys.len() * 2;
-        let old_keys = std::mem::replace(&mut self.keys, vec![EMPTY; len]);
-        let old_slots = std::mem::replace(&mut self.slots, vec![0; len]);
-        for (k, v) in old_keys.into_iter().zip(old_slots) {
+        let len = self.table.len() * 2;
+        let old = std::mem::replace(&mut self.table, empty_table(len));
+        for (k, cell) in old {
             if k != EMPTY {
                 let s = self.slot(k);
-                self.keys[s] = k;
-                self.slots[s] = v;
+                self.table[s] = (k, cell);
             }
         }
     }
@@ -173,14 +178,14 @@ impl DensityControl {
             // not depend on one another, so they overlap, where probing and
             // scanning cell by cell waited on each cell's misses in turn
             // (three quarters of a density-mode trace).
-            let cells: [Option<u32>; 8] = std::array::from_fn(|i| {
+            let cells: [Option<usize>; 8] = std::array::from_fn(|i| {
                 let d = [i & 1, (i >> 1) & 1, i >> 2].map(|b| b as i64);
                 let key = Self::key([c[0] + d[0], c[1] + d[1], c[2] + d[2]]);
                 let s = self.slot(key);
-                (self.keys[s] == key).then_some(self.slots[s])
+                (self.table[s].0 == key).then_some(s)
             });
-            for cell in cells.into_iter().flatten() {
-                for e in &self.cells[cell as usize] {
+            for s in cells.into_iter().flatten() {
+                for e in &self.table[s].1 {
                     let d2 = (e.position - rec.position).length_squared();
                     if d2 <= self.radius2 && e.direction.dot(n) < 0.0 {
                         self.candidates.push((d2, e.index, e.depth, e.caustic));
