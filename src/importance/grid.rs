@@ -16,7 +16,7 @@ pub const FIXED_ONE: f64 = 16_777_216.0;
 /// cell overflows its u64 only after 2^24 such deposits.
 pub const MAX_DEPOSIT: f64 = 65_536.0;
 /// The readers kept apart in the sums: first hits, gather hits, later
-/// bounces ([`Reader`](crate::render::importance_walk::Reader)'s order).
+/// bounces (the camera walk's `Reader` order).
 pub const READERS: usize = 3;
 
 /// Bits of a cell coordinate in a key: coordinates wrap every 2^19 cells

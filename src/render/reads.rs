@@ -10,8 +10,8 @@
 //!
 //! Opt-in ([`super::render_reading`]): a plain render carries no marks and
 //! pays one untaken branch per lookup. With marks, each image row keeps a
-//! bitset per map ([`RowReads`]) and each of the cache build's rayon tasks
-//! one of its own ([`BuildReads`]), OR-ed into the shared ones when done:
+//! bitset per map (`RowReads`) and each of the cache build's rayon tasks
+//! one of its own (`BuildReads`), OR-ed into the shared ones when done:
 //! no atomics in the hot loops (shared bits set per photon cost the study's
 //! renders 20-37 % more time, neighbours sharing cache lines across
 //! threads). A union does not depend on the order of its parts, so the
