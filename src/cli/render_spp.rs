@@ -4,8 +4,8 @@
 use adaptive_pm::embree::EmbreeScene;
 use adaptive_pm::render::progressive::{Round, FIRST_ROUND_SPP};
 use adaptive_pm::render::{
-    add_seen_emission, light_pixels, render_checked, render_path_with, render_progressive,
-    render_to_noise, CheckedRender, Image, NoiseTarget, PathPart, RenderMaps, RenderStats,
+    render_checked, render_halves_to_noise, render_path_with, render_progressive, CheckedRender,
+    Image, NoiseTarget, PathPart, RenderMaps, RenderStats,
 };
 use std::str::FromStr;
 
@@ -119,16 +119,13 @@ pub fn path_image_to_noise(
     part: PathPart,
     target: &NoiseTarget,
 ) -> anyhow::Result<(Image, u64, SppOutcome)> {
-    let keep: Vec<bool> = light_pixels(prepared, cfg)?.iter().map(|l| !l).collect();
     let mut dropped = 0;
     let mut half = |c: &CheckedRender| {
         let (image, s) = render_path_with(prepared, c, part, &|_, _| {})?;
         dropped += s.dropped_samples;
         Ok(image)
     };
-    let hidden = cfg.without_emitters();
-    let mut p = render_to_noise(&hidden, target, &keep, &mut half, &mut say_round(target))?;
-    add_seen_emission(prepared, cfg, p.spp, &mut p.image)?;
+    let p = render_halves_to_noise(prepared, cfg, target, &mut half, &mut say_round(target))?;
     let outcome = SppOutcome {
         spp: p.spp,
         noise: Some((p.noise, p.converged)),

@@ -70,6 +70,7 @@
 //! read cell may be read.
 
 use crate::engine::Shard;
+use crate::render::importance_walk::Reader;
 use crate::scene::Camera;
 
 pub mod counts;
@@ -86,11 +87,11 @@ pub use table::ImportanceGrid;
 pub const DEFAULT_CELL_FRACTION: f32 = 1.0 / 64.0;
 
 /// Index of the first-hit reader in [`ImportanceSums::cells`].
-pub const FIRST: usize = 0;
+pub const FIRST: usize = Reader::First as usize;
 /// Index of the gather reader.
-pub const GATHER: usize = 1;
+pub const GATHER: usize = Reader::Gather as usize;
 /// Index of the later bounces (the adjoint's remainder).
-pub const LATER: usize = 2;
+pub const LATER: usize = Reader::Later as usize;
 
 /// How to run the importance pass: the render it stands for (image size,
 /// samples, gather rays, seed, camera), how far the adjoint looks, the

@@ -121,8 +121,8 @@ pub use progressive::{render_to_noise, NoiseTarget, Progressive, Round};
 pub use quadrature::{floor_points, quadrature_irradiance, unshadowed_irradiance};
 pub use reads::MapReads;
 pub use run::{
-    add_seen_emission, render, render_checked, render_progressive, render_reading, render_with,
-    RenderStats,
+    render, render_checked, render_halves_to_noise, render_progressive, render_reading,
+    render_with, RenderStats,
 };
 
 use crate::error::{Error, Result};

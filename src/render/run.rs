@@ -174,7 +174,6 @@ pub fn render_progressive<C: RayCaster>(
     target.validate()?;
     let (scene, rt) = (prepared.scene(), prepared.caster());
     check_maps(cfg, maps)?;
-    let keep: Vec<bool> = light_pixels(prepared, cfg)?.iter().map(|l| !l).collect();
     let cache = cache_for(scene, rt, maps, cfg, None)?;
     let mut stats = RenderStats::default();
     let mut half = |c: &CheckedRender| {
@@ -182,22 +181,38 @@ pub fn render_progressive<C: RayCaster>(
         stats.add(&s);
         Ok(image)
     };
-    let mut p = render_to_noise(&cfg.without_emitters(), target, &keep, &mut half, on_round)?;
+    let p = render_halves_to_noise(prepared, cfg, target, &mut half, on_round)?;
     if let Some(c) = &cache {
         stats.cache_build_s = c.build_s;
     }
-    add_seen_emission(prepared, cfg, p.spp, &mut p.image)?;
     Ok((p, stats))
+}
+
+/// The rounds of [`render_to_noise`] for any renderer of half images
+/// (`half(cfg)`: `cfg.spp` samples with `cfg.seed`), over the pixels that
+/// are not a light's, the halves rendered with the emitters hidden and the
+/// emission the camera sees added after them (when `cfg.show_emitters`).
+///
+/// # Errors
+/// A bad `target`; whatever `half` returns.
+pub fn render_halves_to_noise<C: RayCaster>(
+    prepared: &PreparedScene<C>,
+    cfg: &CheckedRender,
+    target: &NoiseTarget,
+    half: &mut dyn FnMut(&CheckedRender) -> Result<Image>,
+    on_round: &mut dyn FnMut(&Round),
+) -> Result<Progressive> {
+    let keep: Vec<bool> = light_pixels(prepared, cfg)?.iter().map(|l| !l).collect();
+    let mut p = render_to_noise(&cfg.without_emitters(), target, &keep, half, on_round)?;
+    add_seen_emission(prepared, cfg, p.spp, &mut p.image)?;
+    Ok(p)
 }
 
 /// When `cfg.show_emitters`, adds to `image` (rendered with the emitters
 /// hidden) the emission the camera sees, [`View::Emitters`] at `spp`
 /// samples per pixel: the light's edges anti-aliased, kept out of a noise
 /// estimate they would dominate.
-///
-/// # Errors
-/// As [`render`]; a size other than `cfg`'s.
-pub fn add_seen_emission<C: RayCaster>(
+fn add_seen_emission<C: RayCaster>(
     prepared: &PreparedScene<C>,
     cfg: &CheckedRender,
     spp: u32,
