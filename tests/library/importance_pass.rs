@@ -179,6 +179,7 @@ fn first_hits_on_a_facing_plane_match_the_pinhole_closed_form() {
         spp: 4,
         gather: 0,
         cell_fraction: 1.0 / 512.0,
+        seed: common::seed(1),
         ..ImportanceConfig::default()
     };
     let sums = pass(&s, &cfg, 2);
