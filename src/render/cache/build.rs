@@ -8,7 +8,7 @@ use super::{
 use crate::error::Result;
 use crate::photon_map::{CompactPhoton, Neighbor, PhotonMap};
 use crate::raycast::{Ray, RayCaster};
-use crate::render::estimate::cone_filter;
+use crate::render::estimate::{cone_filter, Estimate};
 use crate::render::reads::{BuildReads, MapReads};
 use crate::scene::{PreparedScene, Scene};
 use glam::Vec3;
@@ -89,7 +89,10 @@ impl IrradianceCache {
                 marks.mark(full, scratch);
             }
             let e = cone_filter(full, scratch, cfg.lookup, |_, power| power);
-            (e.value * scale, e.radius)
+            Estimate {
+                value: e.value * scale,
+                ..e
+            }
         };
         let cell = cell_side(&samples, &scratch, &estimate, cfg, diagonal);
         // Cell faces off the round coordinates that walls sit on (a floor at
@@ -114,10 +117,11 @@ impl IrradianceCache {
             .collect();
         fine.par_sort_unstable();
         let groups: Vec<&[(u64, u32)]> = fine.chunk_by(|a, b| a.0 == b.0).collect();
-        let values: Vec<Vec3> = groups
+        let values: Vec<FineCell> = groups
             .par_iter()
             .map_init(&scratch, |sc, g| {
-                estimate(sc, samples[Self::pick(&samples, g) as usize]).0
+                let e = estimate(sc, samples[Self::pick(&samples, g) as usize]);
+                FineCell::new(e, cell, cfg.stride)
             })
             .collect();
         cache.fill(&samples, &groups, &values);
@@ -127,17 +131,36 @@ impl IrradianceCache {
 
     /// Sizes the table and inserts the finest cells (`groups`, with their
     /// `values`) and the coarser levels. A coarse cell holds the mean over
-    /// the finest cells inside it, each counted once: a mean over samples
-    /// would weight a cell's bright part by its extra photons (a mean of E
-    /// weighted by E: too bright by Var E / E).
-    fn fill(&mut self, samples: &[(Vec3, Vec3, u64)], groups: &[&[(u64, u32)]], values: &[Vec3]) {
+    /// the finest cells inside it, each counted once (a mean over samples
+    /// would weight a cell's bright part by its extra photons: a mean of E
+    /// weighted by E, too bright by Var E / E), and only over its sparsest.
+    ///
+    /// A lookup reads a coarse cell for want of finer ones, that is where
+    /// photons are sparse; a wall with the light on its far side has dense,
+    /// bright cells there, and a coarse cell across it that averaged them
+    /// read the near side at the far side's light (x 4.8 on `door`'s camera
+    /// room, measured). So a finest cell is averaged into levels up to one
+    /// above its [`FineCell::natural`] (a blur of at most about twice its own
+    /// kernel), and a coarse cell averages only its sparsest cells (of its
+    /// highest natural level).
+    fn fill(
+        &mut self,
+        samples: &[(Vec3, Vec3, u64)],
+        groups: &[&[(u64, u32)]],
+        values: &[FineCell],
+    ) {
         let mut keyed: Vec<(u64, u32)> = (1..LEVELS)
             .flat_map(|level| {
                 let cache = &*self;
-                groups.iter().enumerate().map(move |(gi, g)| {
-                    let s = samples[g[0].1 as usize];
-                    (cache.key(s.0, s.1, level), gi as u32)
-                })
+                groups
+                    .iter()
+                    .zip(values)
+                    .enumerate()
+                    .filter(move |(_, (_, v))| level <= v.natural + 1)
+                    .map(move |(gi, (g, _))| {
+                        let s = samples[g[0].1 as usize];
+                        (cache.key(s.0, s.1, level), gi as u32)
+                    })
             })
             .collect();
         keyed.par_sort_unstable();
@@ -147,11 +170,17 @@ impl IrradianceCache {
         self.slots = vec![Slot::default(); (2 * cells).max(2)];
         self.cells = cells;
         for (g, v) in groups.iter().zip(values) {
-            self.insert(g[0].0, to_rgbe(*v));
+            self.insert(g[0].0, to_rgbe(v.value));
         }
         for group in keyed.chunk_by(|a, b| a.0 == b.0) {
-            let sum: Vec3 = group.iter().map(|&(_, gi)| values[gi as usize]).sum();
-            self.insert(group[0].0, to_rgbe(sum / group.len() as f32));
+            let members = || group.iter().map(|&(_, gi)| values[gi as usize]);
+            let sparsest = members().map(|v| v.natural).max().unwrap_or(0);
+            let (sum, weight) = members()
+                .filter(|v| v.natural >= sparsest)
+                .fold((Vec3::ZERO, 0.0f32), |(s, w), v| {
+                    (s + v.value * v.weight, w + v.weight)
+                });
+            self.insert(group[0].0, to_rgbe(sum / weight.max(f32::MIN_POSITIVE)));
         }
     }
 
@@ -164,6 +193,51 @@ impl IrradianceCache {
             .min_by_key(|&i| samples[i as usize].2)
             .unwrap_or(group[0].1)
     }
+}
+
+/// A finest cell's estimate, with what its kernel says of the sample
+/// density around it.
+#[derive(Clone, Copy)]
+struct FineCell {
+    value: Vec3,
+    /// `ceil(log2(s))` for samples `s^2` times sparser than
+    /// [`SAMPLES_PER_CELL`] a cell (0 where they are at least that dense),
+    /// within the levels: the level whose side matches the kernel's.
+    natural: u32,
+    /// `1 / P(the cell holds a sample)`, the sample count Poisson: in a
+    /// coarse cell's mean it undoes the weight that a cell's existence
+    /// gives its part of the surface, since a sparse cell exists in
+    /// proportion to its photons, more likely in the bright part.
+    weight: f32,
+}
+
+impl FineCell {
+    /// The cell of side `cell` whose estimate is `e`, from the photons that
+    /// are not samples (one in `stride` is one).
+    fn new(e: Estimate, cell: f32, stride: u32) -> Self {
+        // Expected samples in the cell: the non-samples' density from the
+        // kernel (`found` in `pi r^2`), over `stride - 1`, times the area.
+        let per_cell =
+            e.found as f32 * cell * cell / (PI * e.radius * e.radius * (stride - 1) as f32);
+        let sparser = SAMPLES_PER_CELL / per_cell.max(1e-12);
+        let level = if sparser > 1.0 {
+            (0.5 * sparser.log2()).ceil()
+        } else {
+            0.0
+        };
+        let exists = -(-per_cell).exp_m1();
+        FineCell {
+            value: e.value,
+            natural: level.min((LEVELS - 1) as f32) as u32,
+            weight: 1.0 / exists.max(1e-6),
+        }
+    }
+}
+
+/// The ratio of a cell's side to the kernel radius of its estimate, where a
+/// cell holds [`SAMPLES_PER_CELL`] samples: `sqrt(SAMPLES_PER_CELL pi stride / k)`.
+fn kernel_fraction(cfg: &CacheConfig) -> f32 {
+    (SAMPLES_PER_CELL * PI * cfg.stride as f32 / cfg.lookup.k as f32).sqrt()
 }
 
 /// A build task's lookup scratch and, when the render marks its reads, its
@@ -185,13 +259,13 @@ fn cell_side<S, G, F>(
 ) -> f32
 where
     G: Fn() -> S + Sync,
-    F: Fn(&mut S, (Vec3, Vec3, u64)) -> (Vec3, f32) + Sync,
+    F: Fn(&mut S, (Vec3, Vec3, u64)) -> Estimate + Sync,
 {
     let probe_step = (samples.len() / 1024).max(1);
     let mut radii: Vec<f32> = samples
         .par_iter()
         .step_by(probe_step)
-        .map_init(scratch, |sc, &s| estimate(sc, s).1)
+        .map_init(scratch, |sc, &s| estimate(sc, s).radius)
         .collect();
     let mid = radii.len() / 2;
     let median = if radii.is_empty() {
@@ -199,8 +273,7 @@ where
     } else {
         *radii.select_nth_unstable_by(mid, f32::total_cmp).1
     };
-    let fraction = (SAMPLES_PER_CELL * PI * cfg.stride as f32 / cfg.lookup.k as f32).sqrt();
-    (fraction * median)
+    (kernel_fraction(cfg) * median)
         .max(1e-6 * diagonal)
         .max(f32::MIN_POSITIVE)
 }
