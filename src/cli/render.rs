@@ -124,7 +124,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let mut trace_cfg = args.budget.config(args.mode)?;
     let cfg = render_config(&args)?;
     if let Some(imp) = trace_cfg.importance.as_mut() {
-        match_render(imp, &cfg);
+        imp.match_render(&cfg);
     }
     let target = noise_target(&args)?;
     check_outputs(&args)?;
@@ -436,15 +436,4 @@ pub fn warn_dropped(dropped: u64, samples: u64) {
              (degenerate geometry, or radiance beyond f32): the image is biased where they fell"
         );
     }
-}
-
-/// The importance pass of a render: the render's camera, aspect and
-/// gather, about 128 x 128 pixels at 4 samples (a render's full sample
-/// count would cost as much as the render).
-fn match_render(imp: &mut adaptive_pm::importance::ImportanceConfig, cfg: &RenderConfig) {
-    let aspect = cfg.width as f64 / cfg.height.max(1) as f64;
-    imp.height = ((128.0 / aspect.sqrt()).round() as u32).clamp(1, cfg.height.max(1));
-    imp.width = ((imp.height as f64 * aspect).round() as u32).max(1);
-    imp.gather = cfg.final_gather;
-    imp.camera = cfg.camera;
 }

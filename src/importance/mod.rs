@@ -119,6 +119,19 @@ pub struct ImportanceConfig {
     pub shard: Shard,
 }
 
+impl ImportanceConfig {
+    /// Matches the pass to a render: its camera, aspect and gather, about
+    /// 128 x 128 pixels at [`ImportanceConfig::spp`] (a render's full sample
+    /// count would cost as much as the render).
+    pub fn match_render(&mut self, rc: &crate::render::RenderConfig) {
+        let aspect = rc.width as f64 / rc.height.max(1) as f64;
+        self.height = ((128.0 / aspect.sqrt()).round() as u32).clamp(1, rc.height.max(1));
+        self.width = ((self.height as f64 * aspect).round() as u32).max(1);
+        self.gather = rc.final_gather;
+        self.camera = rc.camera;
+    }
+}
+
 impl Default for ImportanceConfig {
     /// 128 x 128 pixels at 4 samples, one gather ray (the render's
     /// default), 4 later bounces, cells of 1/64 of the diagonal, the

@@ -4,9 +4,10 @@
 //! Tiny images and budgets: seconds each.
 
 use adaptive_pm::embree::Device;
-use adaptive_pm::engine::Mode;
 use adaptive_pm::experiments::tradeoff::output::to_json;
-use adaptive_pm::experiments::tradeoff::{run_tradeoff, scene_hash, Reference, TradeoffConfig};
+use adaptive_pm::experiments::tradeoff::{
+    run_tradeoff, scene_hash, Contender, Reference, TradeoffConfig,
+};
 use adaptive_pm::scene::Scene;
 
 const CORNELL_GLTF: &[u8] = include_bytes!("../../assets/cornell_box.gltf");
@@ -15,7 +16,7 @@ use adaptive_pm::Error;
 fn small(budgets: Vec<u64>, reference_spp: u32) -> TradeoffConfig {
     TradeoffConfig {
         budgets,
-        modes: vec![Mode::Adaptive, Mode::Classic],
+        modes: vec![Contender::Adaptive, Contender::Classic],
         seeds: 2,
         width: 16,
         height: 16,
@@ -86,7 +87,7 @@ fn quality_knob_is_monotone_in_error_and_work() {
         eprintln!("{check}: {earlier:.4} -> {later:.4} (sigma of the change {sigma:.4})");
         crate::common::assert_sigmas(&check, (later - earlier).max(0.0), sigma, 4.0);
     };
-    for mode in [Mode::Adaptive, Mode::Classic] {
+    for mode in [Contender::Adaptive, Contender::Classic] {
         let g: Vec<_> = r.groups.iter().filter(|g| g.mode == mode).collect();
         assert_eq!(g.len(), 3);
         for w in g.windows(2) {
@@ -154,7 +155,7 @@ fn quality_knob_is_monotone_in_error_and_work() {
 fn a_noisy_reference_stops_the_study() {
     let scene = Scene::cornell().unwrap();
     let mut cfg = small(vec![20_000], 4);
-    cfg.modes = vec![Mode::Classic];
+    cfg.modes = vec![Contender::Classic];
     cfg.seeds = 1;
     cfg.point_samples = 8;
     match run_tradeoff("cornell", &scene, &cfg, &|_| {}) {
@@ -200,4 +201,32 @@ fn reference_cache_is_keyed_by_content_not_path() {
     }
     assert!(!get(&sc).info.cached, "another exponent: computed anew");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The fourth contender: importance runs carry their pass's time inside
+/// their trace's, the paper's modes none, and every run reports its read
+/// share; the files name it.
+#[test]
+fn importance_is_a_contender_with_its_pass_in_the_time() {
+    let scene = Scene::cornell().unwrap();
+    let mut cfg = small(vec![4_000], 2048);
+    cfg.modes = vec![Contender::Classic, Contender::Importance];
+    let r = run_tradeoff("cornell", &scene, &cfg, &|_| {}).unwrap();
+    assert_eq!(r.runs.len(), 4);
+    for run in &r.runs {
+        assert!((0.0..=1.0).contains(&run.read_share), "{run:?}");
+        match run.mode {
+            Contender::Importance => {
+                assert!(
+                    run.importance_s > 0.0 && run.importance_s < run.trace_s,
+                    "{run:?}"
+                );
+            }
+            _ => assert_eq!(run.importance_s, 0.0),
+        }
+    }
+    let json = to_json(&r).to_string();
+    assert!(json.contains("\"mode\":\"importance\""), "{json}");
+    assert!(json.contains("\"importance_s\""));
+    assert!(r.groups.iter().any(|g| g.mode == Contender::Importance));
 }

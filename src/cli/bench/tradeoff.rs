@@ -5,7 +5,7 @@ use super::super::common::{open_scene, AssetRootArgs, EmbreeArgs, ThreadArgs};
 use adaptive_pm::engine::{Budget, Mode};
 use adaptive_pm::experiments::tradeoff::knob::{choose_quality, Target};
 use adaptive_pm::experiments::tradeoff::output::{summary_text, to_json, write_outputs};
-use adaptive_pm::experiments::tradeoff::{run_tradeoff, TradeoffConfig};
+use adaptive_pm::experiments::tradeoff::{run_tradeoff, Contender, TradeoffConfig};
 use anyhow::Context;
 use std::path::PathBuf;
 
@@ -23,13 +23,15 @@ pub struct TradeoffArgs {
     /// Q values instead of N_MAX (comma separated); N_MAX = Q^2 (2^31 - 1).
     #[arg(long, value_delimiter = ',', conflicts_with = "n_max")]
     pub qualities: Option<Vec<f64>>,
-    /// Modes (comma separated).
+    /// Contenders (comma separated): the three modes, and `importance`, the
+    /// adaptive mode with `--importance camera` (its pass matched to the
+    /// study's render, its time counted in the trace's).
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "classic,density,adaptive"
+        default_value = "classic,density,adaptive,importance"
     )]
-    pub modes: Vec<Mode>,
+    pub modes: Vec<Contender>,
     /// Seeds per mode and budget (bias and variance are separated over them).
     #[arg(long, default_value_t = 3)]
     pub seeds: u32,

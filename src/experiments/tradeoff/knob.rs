@@ -11,6 +11,7 @@
 
 use super::measure::{estimated_error, k_for};
 use super::reference::study_points;
+use super::TradeoffConfig;
 use crate::embree::EmbreeScene;
 use crate::engine::config::INT_MAX;
 use crate::engine::{Budget, Mode, TraceConfig, Tracer};
@@ -70,6 +71,12 @@ pub fn choose_quality(
         ));
     }
     let pts = study_points(prepared.scene(), PILOT_POINTS);
+    let study = TradeoffConfig {
+        width: rc.width,
+        height: rc.height,
+        spp: rc.spp,
+        ..TradeoffConfig::default()
+    };
     let mut pilots = Vec::new();
     for n in PILOTS {
         let t = Instant::now();
@@ -80,7 +87,11 @@ pub fn choose_quality(
         c.k = k_for(n);
         render(prepared, Some(&maps), &c)?;
         let secs = t.elapsed().as_secs_f64();
-        pilots.push((n, secs, estimated_error(prepared, mode, n, 1, &pts)?));
+        pilots.push((
+            n,
+            secs,
+            estimated_error(prepared, &study, mode.into(), n, 1, &pts)?,
+        ));
     }
     let [(n0, t0, e0), (n1, t1, e1)] = [pilots[0], pilots[1]];
     let (n0, n1) = (n0 as f64, n1 as f64);

@@ -1,10 +1,10 @@
 //! One run of the trade study: trace, build, render, and the three errors.
 
 use super::reference::Reference;
-use super::{Run, TradeoffConfig};
+use super::{Contender, Run, TradeoffConfig};
 use crate::embree::EmbreeScene;
 use crate::engine::config::INT_MAX;
-use crate::engine::{Budget, Mode, TraceConfig, Tracer};
+use crate::engine::{TraceOutput, Tracer};
 use crate::error::Result;
 use crate::photon_map::PhotonMap;
 use crate::render::{
@@ -42,16 +42,16 @@ pub fn rel_rmse(a: &[f64], r: &[f64]) -> f64 {
 }
 
 // A tracer of its own per run, as a user starting a run would have: its
-// time includes the directionality analysis.
+// time includes the directionality analysis (and the importance pass).
 fn trace(
     prepared: &Arc<EmbreeScene>,
-    mode: Mode,
+    cfg: &TradeoffConfig,
+    who: Contender,
     n_max: u64,
     seed: u64,
-) -> Result<Vec<crate::photon_map::PhotonRecord>> {
-    let mut cfg = TraceConfig::new(mode, Budget::NMax(n_max));
-    cfg.seed = seed;
-    Ok(Tracer::new(Arc::clone(prepared)).trace(&cfg)?.records())
+) -> Result<TraceOutput> {
+    let rc = cfg.render_config(cfg.spp, seed);
+    Tracer::new(Arc::clone(prepared)).trace(&who.trace_config(n_max, seed, &rc))
 }
 
 /// Irradiance (mean over RGB) at each point from `map` alone.
@@ -73,7 +73,8 @@ pub(crate) fn points_irradiance(map: &PhotonMap, pts: &[SurfacePoint], k: usize)
 /// (see [`super`]): `rms(E_A - E_B) / sqrt(2) / mean`.
 pub(crate) fn estimated_error(
     prepared: &Arc<EmbreeScene>,
-    mode: Mode,
+    cfg: &TradeoffConfig,
+    who: Contender,
     n_max: u64,
     seed: u64,
     pts: &[SurfacePoint],
@@ -82,7 +83,7 @@ pub(crate) fn estimated_error(
     let half = (n_max / 2).max(1);
     let mut e = Vec::new();
     for s in [hash2(seed, 0xA), hash2(seed, 0xB)] {
-        let map = PhotonMap::build(&trace(prepared, mode, half, s)?);
+        let map = PhotonMap::build(&trace(prepared, cfg, who, half, s)?.records());
         e.push(points_irradiance(&map, pts, k));
     }
     let mean: f64 = e.iter().flatten().sum::<f64>() / (2 * pts.len()).max(1) as f64;
@@ -104,14 +105,16 @@ pub(crate) fn measure_run(
     prepared: &Arc<EmbreeScene>,
     cfg: &TradeoffConfig,
     reference: &Reference,
-    mode: Mode,
+    who: Contender,
     n_max: u64,
     seed: u64,
 ) -> Result<(Run, RunOutput)> {
     let k = k_for(n_max);
     let t = Instant::now();
-    let records = trace(prepared, mode, n_max, seed)?;
+    let out = trace(prepared, cfg, who, n_max, seed)?;
     let trace_s = t.elapsed().as_secs_f64();
+    let importance_s = out.report.importance.as_ref().map_or(0.0, |i| i.pass_s);
+    let records = out.records();
     let t = Instant::now();
     let maps = RenderMaps::build(&records);
     let build_s = t.elapsed().as_secs_f64();
@@ -131,13 +134,14 @@ pub(crate) fn measure_run(
     }
     let points = points_irradiance(&maps.full, &reference.points, k);
     let run = Run {
-        mode,
+        mode: who,
         quality: (n_max as f64 / INT_MAX as f64).sqrt(),
         n_max,
         seed,
         photons: records.len(),
         k,
         trace_s,
+        importance_s,
         build_s,
         render_s,
         time_s: trace_s + build_s + render_s,
@@ -145,7 +149,7 @@ pub(crate) fn measure_run(
         indirect_rel_rmse: relative_rmse_masked(&indirect, &reference.indirect, &reference.keep)?,
         image_rel_rmse: relative_rmse_masked(&full, &reference.full, &reference.keep)?,
         points_rel_err: rel_rmse(&points, &reference.irradiance),
-        estimated_rel_err: estimated_error(prepared, mode, n_max, seed, &reference.points)?,
+        estimated_rel_err: estimated_error(prepared, cfg, who, n_max, seed, &reference.points)?,
         read_share,
         read_share_pixels,
     };

@@ -1,6 +1,8 @@
 //! The speed/accuracy trade (docs/method.md, "The speed-accuracy trade";
 //! issue 10): error against an unbiased reference, against time and memory,
-//! for the three modes over a range of budgets and several seeds.
+//! for the contenders ([`Contender`]: the paper's three modes, and the
+//! adaptive mode with importance in its counts) over a range of budgets and
+//! several seeds.
 //!
 //! # The reference
 //! The path tracer ([`crate::render::path`]), never one of the competitors,
@@ -40,7 +42,8 @@
 //! floored at 0).
 //!
 //! # The two axes
-//! `time_s` is trace (with the analysis) + kd-trees + the full render, on
+//! `time_s` is trace (with the analysis, and the importance pass where
+//! there is one: `importance_s`) + kd-trees + the full render, on
 //! the pool the study runs in (the thread count is reported); `map_bytes` the
 //! kd-trees the renderer keeps (the full and the indirect map). Equal-time
 //! and equal-memory comparisons interpolate each mode's mean indirect error
@@ -64,16 +67,17 @@
 //! sees no kernel bias; how well it tracks `points_rel_err` is reported as
 //! the ratio over the runs. [`knob`] uses it to pick Q for an error target.
 
+pub mod contender;
 pub mod knob;
 mod measure;
 pub mod output;
 mod reference;
 pub mod summary;
 
+pub use contender::Contender;
 pub use measure::{k_for, rel_rmse};
 pub use reference::{scene_hash, Reference, ReferenceInfo};
 
-use crate::engine::Mode;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use serde::Serialize;
@@ -88,8 +92,8 @@ pub const NOISE_RATIO: f64 = 1.0 / 3.0;
 pub struct TradeoffConfig {
     /// `N_MAX` of each budget level, ascending.
     pub budgets: Vec<u64>,
-    /// The modes compared.
-    pub modes: Vec<Mode>,
+    /// The contenders compared.
+    pub modes: Vec<Contender>,
     /// Seeds per mode and budget (bias and variance are separated over them).
     pub seeds: u32,
     /// Image size of every render (and of the reference).
@@ -115,7 +119,7 @@ impl Default for TradeoffConfig {
     fn default() -> Self {
         TradeoffConfig {
             budgets: vec![10_000, 40_000, 160_000],
-            modes: Mode::ALL.to_vec(),
+            modes: Contender::ALL.to_vec(),
             seeds: 3,
             width: 32,
             height: 32,
@@ -172,11 +176,11 @@ impl TradeoffConfig {
     }
 }
 
-/// One run: a mode, a budget, a seed.
+/// One run: a contender, a budget, a seed.
 #[derive(Clone, Debug, Serialize)]
 pub struct Run {
-    /// The mode.
-    pub mode: Mode,
+    /// The contender.
+    pub mode: Contender,
     /// `sqrt(N_MAX / INT_MAX)`.
     pub quality: f64,
     /// The budget.
@@ -187,8 +191,10 @@ pub struct Run {
     pub photons: usize,
     /// Photons per estimate.
     pub k: usize,
-    /// Trace (with the analysis) seconds.
+    /// Trace seconds (with the analysis and the importance pass).
     pub trace_s: f64,
+    /// Seconds of the importance pass, a part of `trace_s` (0 without one).
+    pub importance_s: f64,
     /// kd-tree seconds.
     pub build_s: f64,
     /// Full render seconds.
@@ -220,9 +226,9 @@ pub struct TradeoffResults {
     pub scene: String,
     /// The reference.
     pub reference: ReferenceInfo,
-    /// Every run, by mode, then budget, then seed.
+    /// Every run, by contender, then budget, then seed.
     pub runs: Vec<Run>,
-    /// Per mode and budget, over the seeds.
+    /// Per contender and budget, over the seeds.
     pub groups: Vec<summary::Group>,
     /// Equal-time comparison, one entry per budget level.
     pub equal_time: Vec<summary::Level>,

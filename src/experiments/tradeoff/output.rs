@@ -4,8 +4,7 @@
 //! against map memory, and error and time against Q (the knob's calibration).
 
 use super::summary::{Group, Level};
-use super::TradeoffResults;
-use crate::engine::Mode;
+use super::{Contender, TradeoffResults};
 use crate::error::{Error, Result};
 use crate::experiments::plot::{write_plot, Plot, RefLine, Series};
 use serde_json::{json, Value};
@@ -46,11 +45,11 @@ pub fn write_outputs(r: &TradeoffResults, dir: &Path) -> Result<()> {
         "tradeoff.json",
         serde_json::to_string_pretty(&to_json(r)).unwrap_or_default(),
     )?;
-    let mut csv = String::from("scene,mode,quality,n_max,seed,photons,k,trace_s,build_s,render_s,time_s,map_bytes,indirect_rel_rmse,image_rel_rmse,points_rel_err,estimated_rel_err,read_share,read_share_pixels\n");
+    let mut csv = String::from("scene,mode,quality,n_max,seed,photons,k,trace_s,importance_s,build_s,render_s,time_s,map_bytes,indirect_rel_rmse,image_rel_rmse,points_rel_err,estimated_rel_err,read_share,read_share_pixels\n");
     for x in &r.runs {
         let _ = writeln!(
             csv,
-            "{},{},{:.6},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
+            "{},{},{:.6},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6}",
             r.scene,
             x.mode.name(),
             x.quality,
@@ -59,6 +58,7 @@ pub fn write_outputs(r: &TradeoffResults, dir: &Path) -> Result<()> {
             x.photons,
             x.k,
             x.trace_s,
+            x.importance_s,
             x.build_s,
             x.render_s,
             x.time_s,
@@ -101,7 +101,7 @@ pub fn write_outputs(r: &TradeoffResults, dir: &Path) -> Result<()> {
 }
 
 fn series(groups: &[Group], x: fn(&Group) -> f64, y: fn(&Group) -> f64) -> Vec<Series> {
-    Mode::ALL
+    Contender::ALL
         .iter()
         .map(|m| Series {
             name: m.name().to_string(),

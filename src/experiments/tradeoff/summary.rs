@@ -13,8 +13,7 @@
 
 use super::measure::RunOutput;
 use super::reference::Reference;
-use super::{Run, TradeoffConfig};
-use crate::engine::Mode;
+use super::{Contender, Run, TradeoffConfig};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -36,8 +35,8 @@ pub struct Stat {
 /// One mode and budget over its seeds.
 #[derive(Clone, Debug, Serialize)]
 pub struct Group {
-    /// The mode.
-    pub mode: Mode,
+    /// The contender.
+    pub mode: Contender,
     /// The budget.
     pub n_max: u64,
     /// Its quality Q.
@@ -161,11 +160,11 @@ pub struct Level {
     /// Seconds or bytes of the level.
     pub at: f64,
     /// The mode with the lowest indirect error there.
-    pub best: Option<Mode>,
+    pub best: Option<Contender>,
     /// Each mode's mean indirect error there.
     pub errors: BTreeMap<String, f64>,
     /// The mode with the lowest points error there.
-    pub best_points: Option<Mode>,
+    pub best_points: Option<Contender>,
     /// Each mode's mean points error there.
     pub points_errors: BTreeMap<String, f64>,
 }
@@ -197,7 +196,7 @@ pub fn interpolate(c: &[(f64, f64)], x: f64) -> Option<f64> {
     Some((y0.ln() + f * (y1.ln() - y0.ln())).exp())
 }
 
-fn best(errors: &BTreeMap<String, f64>, modes: &[Mode]) -> Option<Mode> {
+fn best(errors: &BTreeMap<String, f64>, modes: &[Contender]) -> Option<Contender> {
     modes
         .iter()
         .filter_map(|m| errors.get(m.name()).map(|e| (*m, *e)))
@@ -206,12 +205,12 @@ fn best(errors: &BTreeMap<String, f64>, modes: &[Mode]) -> Option<Mode> {
 }
 
 /// The equal-time or equal-memory comparison, one level per budget.
-pub fn equal(groups: &[Group], modes: &[Mode], levels: usize, axis: Axis) -> Vec<Level> {
+pub fn equal(groups: &[Group], modes: &[Contender], levels: usize, axis: Axis) -> Vec<Level> {
     let x = |g: &Group| match axis {
         Axis::Time => g.time_s,
         Axis::Memory => g.map_bytes,
     };
-    let curve = |m: Mode, f: fn(&Group) -> f64| {
+    let curve = |m: Contender, f: fn(&Group) -> f64| {
         let mut c: Vec<(f64, f64)> = groups
             .iter()
             .filter(|g| g.mode == m)
