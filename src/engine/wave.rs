@@ -172,9 +172,7 @@ fn shade_hit<C>(
     // Surfaces are two-sided: the normal on the side the photon arrives from.
     let arrival_side = h.facing(p.direction);
     if !brdf.is_specular() {
-        let read = ctx
-            .importance
-            .is_none_or(|i| i.stores(position, arrival_side));
+        let read = ctx.importance.is_none_or(|i| i.stores(position));
         let record = PhotonRecord {
             position,
             power,

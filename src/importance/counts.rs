@@ -68,10 +68,10 @@ impl<'a> ImportanceCounts<'a> {
         (self.grid.adjoint(x, n) * self.inv_ref).clamp(ALPHA_I_FLOOR, ALPHA_I_MAX)
     }
 
-    /// Whether a photon arriving at `x` on the side of `n` is stored: only
-    /// in a read cell or next to one.
-    pub fn stores(&self, x: Vec3, n: Vec3) -> bool {
-        self.grid.near_read(x, n)
+    /// Whether a photon at `x` is stored: only within the render's kernel
+    /// radius of a read cell ([`ImportanceGrid::within_reach`]).
+    pub fn stores(&self, x: Vec3) -> bool {
+        self.grid.within_reach(x)
     }
 
     /// A light's emission `alpha_I` from its pilot photons' mean adjoint:

@@ -50,7 +50,17 @@ pub(crate) fn to_fixed(w: f32) -> u64 {
 pub struct CellGrid {
     origin: Vec3,
     cell: f32,
+    reach: f32,
 }
+
+/// The bucket bits of a reach cell's key: no normal's bucket (those are
+/// 0..6), since the store rule holds for photons on surfaces of any side.
+const ANY_SIDE: u64 = 7;
+
+/// The most reach cells a read cell's flag spreads over, per axis and
+/// side: beyond, [`CellGrid::reach_cells`] is `None` and every photon is
+/// stored (a radius that wide reads nearly the whole scene anyway).
+pub const MAX_REACH_CELLS: i64 = 4;
 
 impl CellGrid {
     /// Cells of side `fraction` times the diagonal of the box `lo..hi`.
@@ -75,7 +85,57 @@ impl CellGrid {
         Ok(CellGrid {
             origin: lo,
             cell: diagonal * fraction,
+            reach: diagonal * crate::render::DEFAULT_MAX_RADIUS_FRACTION,
         })
+    }
+
+    /// The same cells for a render whose kernels reach `reach` (world
+    /// units; [`CellGrid::for_bounds`] takes the renderer's default, a
+    /// tenth of the diagonal): photons within it of a read point are
+    /// stored.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a reach that is not a positive
+    /// finite number.
+    pub fn with_reach(self, reach: f32) -> Result<Self> {
+        if !(reach.is_finite() && reach > 0.0) {
+            return Err(Error::param(
+                "importance reach",
+                format!("the kernel radius must be a positive finite length, got {reach}"),
+            ));
+        }
+        Ok(CellGrid { reach, ..self })
+    }
+
+    /// The largest kernel radius the store rule covers (world units).
+    pub fn reach(&self) -> f32 {
+        self.reach
+    }
+
+    /// How many reach cells (the adjoint's coarse cubes, side
+    /// [`ADJOINT_COARSENING`] cells) a read cell's store flag spreads over
+    /// on each side: enough that every point within [`CellGrid::reach`] of
+    /// a read point lies in a flagged cube. `None` beyond
+    /// [`MAX_REACH_CELLS`]: store everywhere.
+    pub fn reach_cells(&self) -> Option<i64> {
+        let side = self.cell * ADJOINT_COARSENING as f32;
+        let d = (self.reach / side).ceil();
+        (d <= MAX_REACH_CELLS as f32).then_some(d.max(1.0) as i64)
+    }
+
+    /// The key of the reach cube of `x`: the coarse cube, on no side.
+    pub fn reach_key(&self, x: Vec3) -> u64 {
+        Self::reach_of(self.coarse_key(x, Vec3::Y))
+    }
+
+    /// The reach cube of the cell or coarse cell `key`.
+    pub(super) fn reach_of(key: u64) -> u64 {
+        let coarse = if key & COARSE != 0 {
+            key
+        } else {
+            Self::coarse_of(key)
+        };
+        (coarse & !(7 << 57)) | (ANY_SIDE << 57)
     }
 
     /// The side of a cell (world units).
@@ -117,17 +177,19 @@ impl CellGrid {
         xyz | (key & (7 << 57)) | COARSE
     }
 
-    /// The 26 cells around `key`'s, in its bucket.
-    pub(super) fn neighbours(key: u64) -> impl Iterator<Item = u64> {
+    /// The `(2 d + 1)^3` cells around `key`'s and itself, on its level and
+    /// side.
+    pub(super) fn around(key: u64, d: i64) -> impl Iterator<Item = u64> {
         let field = |i: u32| (key >> (i * COORD_BITS)) & COORD_MASK;
-        let (x, y, z, b) = (field(0), field(1), field(2), key >> 57);
-        let step = |v: u64, d: i64| (v as i64 + d) as u64 & COORD_MASK;
-        (0..27).filter(|&i| i != 13).map(move |i| {
-            let (dx, dy, dz) = (i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1);
+        let (x, y, z, rest) = (field(0), field(1), field(2), key >> 57);
+        let step = |v: u64, o: i64| (v as i64 + o) as u64 & COORD_MASK;
+        let w = 2 * d + 1;
+        (0..w * w * w).map(move |i| {
+            let (dx, dy, dz) = (i % w - d, i / w % w - d, i / (w * w) - d);
             step(x, dx)
                 | (step(y, dy) << COORD_BITS)
                 | (step(z, dz) << (2 * COORD_BITS))
-                | (b << 57)
+                | (rest << 57)
         })
     }
 }
@@ -255,16 +317,38 @@ mod tests {
     use super::*;
 
     #[test]
-    fn neighbours_are_the_26_around_in_the_bucket() {
+    fn around_is_the_cube_of_cells_in_the_bucket() {
         let g = CellGrid::for_bounds(Vec3::ZERO, Vec3::ONE, 0.1).unwrap();
         let key = g.key(Vec3::splat(0.05), Vec3::Y);
-        let mut n: Vec<u64> = CellGrid::neighbours(key).collect();
+        let mut n: Vec<u64> = CellGrid::around(key, 1).collect();
         n.sort_unstable();
         n.dedup();
-        assert_eq!(n.len(), 26);
-        assert!(!n.contains(&key));
+        assert_eq!(n.len(), 27);
+        assert!(n.contains(&key));
         let h = g.cell_size();
         assert!(n.contains(&g.key(Vec3::splat(0.05) + Vec3::new(h, -h, 0.0), Vec3::Y)));
         assert!(!n.contains(&g.key(Vec3::splat(0.05) + Vec3::X * h, -Vec3::Y)));
+        assert_eq!(CellGrid::around(key, 2).count(), 125);
+    }
+
+    #[test]
+    fn the_reach_cubes_cover_every_point_within_the_reach() {
+        // Cells of 1/64 of the diagonal: reach cubes of 1/16, a reach of a
+        // tenth of the diagonal spreads two cubes a side.
+        let g = CellGrid::for_bounds(Vec3::ZERO, Vec3::ONE, 1.0 / 64.0).unwrap();
+        let d = g.reach_cells().unwrap();
+        assert_eq!(d, 2);
+        let mut rng = crate::rng::Rng::new(7);
+        for _ in 0..2000 {
+            let p = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let dir = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
+            let q = p + dir.normalize_or_zero() * g.reach() * rng.next_f32();
+            let near: Vec<u64> =
+                CellGrid::around(CellGrid::reach_of(g.key(p, Vec3::Y)), d).collect();
+            assert!(near.contains(&g.reach_key(q)), "{p} -> {q}");
+        }
+        let wide = g.with_reach(1.0).unwrap();
+        assert_eq!(wide.reach_cells(), None);
+        assert!(g.with_reach(f32::NAN).is_err() && g.with_reach(0.0).is_err());
     }
 }

@@ -54,7 +54,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | 0-3 | tag: the high 32 bits of the key's hash, low bit set (0 = empty) |
-//! | 4-5 | read importance (first + gather), bfloat16; its sign bit flags a cell that is read or next to one |
+//! | 4-5 | read importance (first + gather), bfloat16; in a reach cube's slot, its sign bit alone: photons there are stored |
 //! | 6-7 | adjoint (first + gather + later), bfloat16 |
 //!
 //! The adjoint is read from **coarse cells** of side
@@ -63,11 +63,24 @@
 //! and a room seen only through a door would otherwise be mostly cells
 //! without a single deposit, each photon there rouletted to the floor.
 //!
+//! # What is stored
+//! A photon is stored only where a kernel of the render may return it:
+//! within the render's largest search radius ([`ImportanceConfig::reach`],
+//! by default the renderer's tenth of the diagonal) of a read cell, on a
+//! surface of any side (the k-nearest lookups accept any photon whose
+//! surface turns less than 90 degrees from their own). The rule is kept
+//! on the coarse cubes, as **reach cubes** (their own key, on no side):
+//! each read cell flags the `(2 d + 1)^3` cubes around its own, `d` the
+//! reach over the cube's side rounded up ([`CellGrid::reach_cells`]), so
+//! every point within the reach of a read point lies in a flagged cube.
+//! A reach wider than [`MAX_REACH_CELLS`] cubes stores everywhere. (Only
+//! the 26 cells next to a read cell were flagged at first: the photons of
+//! room A's floor of `door` that its sparse kernels reach from farther
+//! went unstored, and the render read 7 % dark.)
+//!
 //! One probe per lookup ([`ImportanceGrid::read`], [`ImportanceGrid::adjoint`],
-//! [`ImportanceGrid::near_read`]); a tag collision, odds about cells / 2^32
-//! per lookup, reads a wrong cell. The 26 neighbours of a read cell are kept
-//! with the flag set: a kernel reaches past its cell, so photons next to a
-//! read cell may be read.
+//! [`ImportanceGrid::within_reach`]); a tag collision, odds about cells /
+//! 2^32 per lookup, reads a wrong cell.
 
 use crate::engine::Shard;
 use crate::render::importance_walk::Reader;
@@ -79,7 +92,9 @@ mod pass;
 mod table;
 
 pub use counts::{ImportanceCounts, ALPHA_I_FLOOR, ALPHA_I_MAX, PILOT_PHOTONS};
-pub use grid::{CellGrid, ImportanceSums, ADJOINT_COARSENING, FIXED_ONE, MAX_DEPOSIT, READERS};
+pub use grid::{
+    CellGrid, ImportanceSums, ADJOINT_COARSENING, FIXED_ONE, MAX_DEPOSIT, MAX_REACH_CELLS, READERS,
+};
 pub use pass::{importance_pass, MAX_LATER_BOUNCES};
 pub use table::ImportanceGrid;
 
@@ -115,12 +130,17 @@ pub struct ImportanceConfig {
     pub camera: Option<Camera>,
     /// Cell side over the scene's diagonal, in `(0, 1]`.
     pub cell_fraction: f32,
+    /// The render's largest kernel radius (world units): photons within it
+    /// of a read cell are stored. `None` is the renderer's default,
+    /// [`crate::render::DEFAULT_MAX_RADIUS_FRACTION`] of the diagonal.
+    pub reach: Option<f32>,
     /// Which camera samples to walk (the whole pass by default).
     pub shard: Shard,
 }
 
 impl ImportanceConfig {
-    /// Matches the pass to a render: its camera, aspect and gather, about
+    /// Matches the pass to a render: its camera, aspect, gather and kernel
+    /// radius, about
     /// 128 x 128 pixels at [`ImportanceConfig::spp`] (a render's full sample
     /// count would cost as much as the render).
     pub fn match_render(&mut self, rc: &crate::render::RenderConfig) {
@@ -129,6 +149,7 @@ impl ImportanceConfig {
         self.width = ((self.height as f64 * aspect).round() as u32).max(1);
         self.gather = rc.final_gather;
         self.camera = rc.camera;
+        self.reach = rc.max_radius;
     }
 }
 
@@ -146,6 +167,7 @@ impl Default for ImportanceConfig {
             seed: 1,
             camera: None,
             cell_fraction: DEFAULT_CELL_FRACTION,
+            reach: None,
             shard: Shard::WHOLE,
         }
     }

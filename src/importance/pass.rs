@@ -50,6 +50,14 @@ impl ImportanceConfig {
                 ),
             ));
         }
+        if let Some(r) = self.reach {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(Error::param(
+                    "importance reach",
+                    format!("the kernel radius must be a positive finite length, got {r}"),
+                ));
+            }
+        }
         self.shard.validate()
     }
 }
@@ -77,6 +85,10 @@ fn run(scene: &Scene, rt: &dyn RayCaster, cfg: &ImportanceConfig) -> Result<Impo
     })?;
     let (lo, hi) = scene.bounds();
     let grid = CellGrid::for_bounds(lo, hi, cfg.cell_fraction)?;
+    let grid = match cfg.reach {
+        Some(r) => grid.with_reach(r)?,
+        None => grid,
+    };
     let checked = CheckedCaster::new(scene, rt);
     let walk = CameraWalk::new(
         scene,

@@ -5,11 +5,11 @@
 use super::grid::{CellGrid, ImportanceSums, ADJOINT_COARSENING, FIXED_ONE};
 use crate::rng::mix64;
 use glam::Vec3;
-use std::collections::HashMap;
+use std::collections::{BTreeSet, HashMap};
 
 /// One slot: a tag of the cell's key (0 = empty), the read importance
-/// (bf16; its sign bit marks a cell next to a read one) and the adjoint
-/// (bf16).
+/// (bf16; in a reach cube's slot, only its sign bit: photons there are
+/// stored) and the adjoint (bf16).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct Slot {
     tag: u32,
@@ -17,7 +17,8 @@ struct Slot {
     adjoint: u16,
 }
 
-const NEAR_READ: u16 = 0x8000;
+/// The sign bit of a reach cube's read field: photons there are stored.
+const STORED: u16 = 0x8000;
 
 /// f32 to bfloat16, rounded to nearest even (positive finite values stay
 /// positive).
@@ -28,7 +29,7 @@ fn to_bf16(v: f32) -> u16 {
 }
 
 fn from_bf16(v: u16) -> f32 {
-    f32::from_bits(u32::from(v & !NEAR_READ) << 16)
+    f32::from_bits(u32::from(v & !STORED) << 16)
 }
 
 /// Importance per unit area in the cells of a hashed grid, one probe per
@@ -39,24 +40,33 @@ pub struct ImportanceGrid {
     grid: CellGrid,
     cells: usize,
     adjoint_ref: f32,
+    stores_everywhere: bool,
 }
 
 impl ImportanceGrid {
     pub(super) fn from_sums(sums: &ImportanceSums) -> Self {
-        // read = first + gather, adjoint = all three; a read cell's
-        // neighbours are kept too, flagged, so that photons next to what is
-        // read are stored (a kernel reaches past its cell).
+        // read = first + gather, adjoint = all three.
         let mut values: HashMap<u64, (f32, f32, bool)> = HashMap::new();
         for (k, s) in &sums.cells {
             let read = sums.density(s, 0) + sums.density(s, 1);
             let adjoint = read + sums.density(s, 2);
-            let e = values.entry(*k).or_insert((0.0, 0.0, false));
-            (e.0, e.1) = (read as f32, adjoint as f32);
+            values.insert(*k, (read as f32, adjoint as f32, false));
         }
-        for (k, s) in &sums.cells {
-            if s[0] > 0 || s[1] > 0 {
-                for n in CellGrid::neighbours(*k) {
-                    values.entry(n).or_insert((0.0, 0.0, false)).2 = true;
+        // The store rule: a kernel at a read point reads photons up to the
+        // render's radius away, on any surface turned less than 90 degrees
+        // from its own, so the reach cubes within that radius of a read
+        // cell are flagged, on every side.
+        let reach = sums.grid.reach_cells();
+        if let Some(d) = reach {
+            let seeds: BTreeSet<u64> = sums
+                .cells
+                .iter()
+                .filter(|(_, s)| s[0] > 0 || s[1] > 0)
+                .map(|(k, _)| CellGrid::reach_of(*k))
+                .collect();
+            for seed in seeds {
+                for k in CellGrid::around(seed, d) {
+                    values.insert(k, (0.0, 0.0, true));
                 }
             }
         }
@@ -80,10 +90,11 @@ impl ImportanceGrid {
             grid: sums.grid,
             cells: keys.len(),
             adjoint_ref: 0.0,
+            stores_everywhere: reach.is_none(),
         };
         for k in keys {
-            let (read, adjoint, near) = values[&k];
-            let read = to_bf16(read) | if near || read > 0.0 { NEAR_READ } else { 0 };
+            let (read, adjoint, stored) = values[&k];
+            let read = if stored { STORED } else { to_bf16(read) };
             grid.insert(k, read, to_bf16(adjoint));
         }
         // The mean adjoint of the read cells, at their coarse cells.
@@ -137,10 +148,10 @@ impl ImportanceGrid {
         from_bf16(self.probe(x, n).read)
     }
 
-    /// True when a read cell is at `x` or next to it: photons there may be
-    /// read by a kernel.
-    pub fn near_read(&self, x: Vec3, n: Vec3) -> bool {
-        self.probe(x, n).read & NEAR_READ != 0
+    /// True when a photon at `x` is stored: a kernel of the render's radius
+    /// ([`CellGrid::reach`]) at a read point may return it.
+    pub fn within_reach(&self, x: Vec3) -> bool {
+        self.stores_everywhere || self.probe_key(self.grid.reach_key(x)).read & STORED != 0
     }
 
     /// The adjoint estimate at `x` (side of `n`): the importance of what
@@ -154,8 +165,8 @@ impl ImportanceGrid {
         self.adjoint_ref
     }
 
-    /// Cells in the table (read cells, cells with an adjoint, and their
-    /// flagged neighbours).
+    /// Cells in the table (read cells, cells with an adjoint, and the
+    /// flagged reach cubes).
     pub fn len(&self) -> usize {
         self.cells
     }
@@ -215,8 +226,14 @@ mod tests {
             g.coarse_key(below, Vec3::Y)
         );
         assert_eq!(grid.read(x, -Vec3::Y), 0.0);
-        assert!(grid.near_read(x + Vec3::X * h, Vec3::Y));
-        assert!(!grid.near_read(x + Vec3::X * 2.0 * h, Vec3::Y));
+        // Photons are stored within the reach (a tenth of the diagonal:
+        // one reach cube of 4 h = 1 a side here), on every side, and not
+        // beyond it.
+        let d = g.reach_cells().unwrap() as f32;
+        let cube = 4.0 * h;
+        assert!(grid.within_reach(x + Vec3::X * g.reach()));
+        assert!(grid.within_reach(x - Vec3::Y * g.reach()));
+        assert!(!grid.within_reach(x + Vec3::Z * (d + 1.0) * cube));
         assert!(grid.bytes_per_cell() <= 16);
     }
 }

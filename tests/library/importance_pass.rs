@@ -145,8 +145,10 @@ fn no_importance_where_no_camera_or_gather_ray_reaches() {
     let mut inside_seen = 0;
     for (p, n) in face_points(Vec3::ZERO, 1.0) {
         // The room's outer faces, seen from outside (normal outward).
-        let what = (grid.read(p, n), grid.adjoint(p, n), grid.near_read(p, n));
-        assert_eq!(what, (0.0, 0.0, false), "outside of the room at {p}");
+        // (Photons there may still be stored: a kernel at an inner point
+        // reaches the render's radius, on surfaces of any side.)
+        let what = (grid.read(p, n), grid.adjoint(p, n));
+        assert_eq!(what, (0.0, 0.0), "outside of the room at {p}");
         inside_seen += usize::from(grid.adjoint(p, -n) > 0.0);
     }
     // The gather and later bounces reach every wall from inside.
@@ -154,7 +156,7 @@ fn no_importance_where_no_camera_or_gather_ray_reaches() {
     for (p, n) in face_points(Vec3::new(2.0, 0.0, 0.0), 0.5) {
         for n in [n, -n] {
             assert_eq!(grid.adjoint(p, n), 0.0, "shut cube at {p}");
-            assert!(!grid.near_read(p, n), "shut cube at {p}");
+            assert!(!grid.within_reach(p), "shut cube at {p}");
         }
     }
 }
