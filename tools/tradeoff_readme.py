@@ -20,12 +20,12 @@ def verdict(level, key="errors", who="adaptive", against=None):
     the others when None)."""
     errs = {m: e for m, e in level[key].items() if against is None or m in against or m == who}
     errs = sorted(errs.items(), key=lambda kv: kv[1])
-    if len(errs) < 2:
-        return "n/a", ""
-    (m0, e0), (m1, e1) = errs[0], errs[1]
     ad = dict(errs).get(who)
     if ad is None:
         return "has no value", "outside its measured range"
+    if len(errs) < 2:
+        return "has no rival", "the others are outside their measured ranges"
+    (m0, e0), (m1, e1) = errs[0], errs[1]
     if m0 == who:
         word = "wins" if e1 > e0 * (1 + TIE) else "ties"
         return word, f"x{e1 / e0:.2f} below {m1}"
