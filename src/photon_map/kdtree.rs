@@ -19,6 +19,7 @@
 //! Parameters: [`LEAF_SIZE`] (query speed; measured in `benches/kdtree.rs`),
 //! `PARALLEL_MIN` (subtrees smaller than this are built on one thread).
 
+use super::boxes::{BoxSink, GridBox};
 use super::photon::{CompactPhoton, Quantizer};
 use super::stems;
 use super::PhotonRecord;
@@ -43,6 +44,8 @@ pub struct PhotonMap {
     pub(crate) bounds: [[f32; 3]; 2],
     /// The inner nodes' split planes, breadth-first ([`super::stems`]).
     pub(crate) stems: Vec<u32>,
+    /// The larger subtrees' bounding boxes, breadth-first ([`super::boxes`]).
+    pub(crate) boxes: Vec<GridBox>,
     skipped: usize,
 }
 
@@ -109,9 +112,10 @@ impl PhotonMap {
             photons.len() <= u32::MAX as usize,
             "a photon map holds at most u32::MAX photons"
         );
-        let bounds = build_tree(&mut photons);
+        let (bounds, boxes) = build_tree(&mut photons);
         PhotonMap {
             bounds,
+            boxes,
             stems: stems::build(&photons),
             photons,
             quant,
@@ -140,9 +144,10 @@ impl PhotonMap {
                 .with_min_len(4096)
                 .for_each(|p| p.set_axis(0));
         }
-        let bounds = build_tree(&mut photons);
+        let (bounds, boxes) = build_tree(&mut photons);
         PhotonMap {
             bounds,
+            boxes,
             stems: stems::build(&photons),
             photons,
             quant,
@@ -207,10 +212,12 @@ impl PhotonMap {
     }
 
     /// Bytes the map holds: its allocated photon array, the split planes of
-    /// its inner nodes (under 0.33 byte a photon) and the struct itself.
+    /// its inner nodes (under 0.33 byte a photon), the boxes of its larger
+    /// subtrees (under 0.1 byte a photon) and the struct itself.
     pub fn memory_bytes(&self) -> usize {
         self.photons.capacity() * std::mem::size_of::<CompactPhoton>()
             + self.stems.capacity() * std::mem::size_of::<u32>()
+            + self.boxes.capacity() * std::mem::size_of::<GridBox>()
             + std::mem::size_of::<Self>()
     }
 
@@ -288,16 +295,24 @@ pub(super) fn is_valid(r: &PhotonRecord) -> bool {
 }
 
 /// Turns `photons` into its kd-tree in place (see the module docs for the
-/// layout) and returns their bounding box in grid units. The root's widest-axis
-/// pass is that box's, done once and in parallel.
-fn build_tree(photons: &mut [CompactPhoton]) -> [[f32; 3]; 2] {
+/// layout) and returns their bounding box in grid units and the boxes of the
+/// larger subtrees ([`super::boxes`]). The root's widest-axis pass is that
+/// box's, done once and in parallel.
+fn build_tree(photons: &mut [CompactPhoton]) -> ([[f32; 3]; 2], Vec<GridBox>) {
     let bounds = field_bounds_par(photons);
-    build_subtree(photons, Some(bounds));
-    grid_bounds(&bounds)
+    let sink = BoxSink::new(photons.len());
+    build_subtree(photons, Some(bounds), 0, &sink);
+    (grid_bounds(&bounds), sink.finish())
 }
 
-/// [`build_tree`] of a subtree, whose field bounds are known or not.
-fn build_subtree(photons: &mut [CompactPhoton], bounds: Option<FieldBounds>) {
+/// [`build_tree`] of the subtree of breadth-first index `node`, whose field
+/// bounds are known or not.
+fn build_subtree(
+    photons: &mut [CompactPhoton],
+    bounds: Option<FieldBounds>,
+    node: usize,
+    sink: &BoxSink,
+) {
     let n = photons.len();
     if n <= LEAF_SIZE {
         // By all 16 bytes, position first; a tie on it (rare) behind a branch.
@@ -311,7 +326,9 @@ fn build_subtree(photons: &mut [CompactPhoton], bounds: Option<FieldBounds>) {
         });
         return;
     }
-    let axis = widest_axis(&bounds.unwrap_or_else(|| field_bounds(photons)));
+    let bounds = bounds.unwrap_or_else(|| field_bounds(photons));
+    sink.put(node, || grid_bounds(&bounds));
+    let axis = widest_axis(&bounds);
     let mid = n / 2;
     // Only "less" matters to the selection (equal means bitwise equal).
     photons.select_nth_unstable_by(mid, |a, b| {
@@ -325,10 +342,13 @@ fn build_subtree(photons: &mut [CompactPhoton], bounds: Option<FieldBounds>) {
     let (left, rest) = photons.split_at_mut(mid);
     let right = &mut rest[1..];
     if n >= PARALLEL_MIN {
-        rayon::join(|| build_subtree(left, None), || build_subtree(right, None));
+        rayon::join(
+            || build_subtree(left, None, 2 * node + 1, sink),
+            || build_subtree(right, None, 2 * node + 2, sink),
+        );
     } else {
-        build_subtree(left, None);
-        build_subtree(right, None);
+        build_subtree(left, None, 2 * node + 1, sink);
+        build_subtree(right, None, 2 * node + 2, sink);
     }
 }
 

@@ -14,6 +14,7 @@
 
 use glam::Vec3;
 
+mod boxes;
 pub mod density;
 pub mod kdtree;
 mod owners;

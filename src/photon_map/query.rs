@@ -14,6 +14,7 @@
 //! NaN radius. A radius of 0 returns the photons exactly at the query point (at its
 //! quantised position) and an infinite radius is unbounded.
 
+use super::boxes::{self, GridBox};
 use super::kdtree::{PhotonMap, LEAF_SIZE};
 use super::photon::CompactPhoton;
 use super::stems;
@@ -66,6 +67,7 @@ impl PhotonMap {
         let mut search = Knn {
             q: self.quant.grid_point(p),
             stems: &self.stems,
+            boxes: &self.boxes,
             k,
             r2: (r * r).min(f32::MAX as f64) as f32,
             heap: out,
@@ -93,6 +95,7 @@ impl PhotonMap {
         let mut search = Within {
             q: self.quant.grid_point(p),
             stems: &self.stems,
+            boxes: &self.boxes,
             r2: if radius == f32::INFINITY {
                 f32::INFINITY
             } else {
@@ -141,6 +144,15 @@ fn dist2(q: &[f32; 3], p: &CompactPhoton) -> f32 {
 #[inline(always)]
 fn gap2(off: &[f32; 3]) -> f32 {
     off[0] * off[0] + off[1] * off[1] + off[2] * off[2]
+}
+
+/// The larger of the split planes' gaps `off` and the gaps to the subtree's
+/// own box, per axis: both are lower bounds of every photon's distance on
+/// that axis, so their maximum is too.
+#[inline(always)]
+fn tighten(off: [f32; 3], b: &GridBox, q: &[f32; 3]) -> [f32; 3] {
+    let g = boxes::gaps(b, q);
+    [0, 1, 2].map(|a| off[a].max(g[a]))
 }
 
 /// A subtree: its photons, where they start in the map, its stem index.
@@ -221,6 +233,7 @@ fn sort_neighbors(out: &mut [Neighbor]) {
 struct Knn<'a, F> {
     q: [f32; 3],
     stems: &'a [u32],
+    boxes: &'a [GridBox],
     k: usize,
     r2: f32,
     heap: &'a mut Vec<Neighbor>,
@@ -275,6 +288,12 @@ impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
             }
             return;
         }
+        if let Some(b) = self.boxes.get(node) {
+            off = tighten(off, b, &self.q);
+            if !self.may_enter(gap2(&off)) {
+                return;
+            }
+        }
         let mid = n / 2;
         let (axis, split) = stems::split(self.stems[node]);
         let d = self.q[axis] - split as f32;
@@ -296,6 +315,7 @@ impl<F: Fn(&CompactPhoton) -> bool> Knn<'_, F> {
 struct Within<'a> {
     q: [f32; 3],
     stems: &'a [u32],
+    boxes: &'a [GridBox],
     r2: f32,
     out: &'a mut Vec<Neighbor>,
 }
@@ -319,6 +339,12 @@ impl Within<'_> {
                 self.consider(base + i, p);
             }
             return;
+        }
+        if let Some(b) = self.boxes.get(node) {
+            off = tighten(off, b, &self.q);
+            if gap2(&off) > self.r2 {
+                return;
+            }
         }
         let mid = n / 2;
         let (axis, split) = stems::split(self.stems[node]);

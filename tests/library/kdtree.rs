@@ -175,6 +175,40 @@ fn degenerate_inputs_match_brute_force() {
     }
 }
 
+/// A sharp light's primary map: a dense spot on the floor and a few photons
+/// up the walls, so the root's box is the whole room and no floor subtree
+/// is split on the vertical. Queries from the ceiling are the ones the
+/// subtrees' own boxes prune (`photon_map::boxes`); they must find what
+/// brute force finds.
+#[test]
+fn a_floor_spot_queried_from_the_ceiling_matches_brute_force() {
+    let mut rng = Rng::new(21);
+    let mut records: Vec<_> = (0..6000)
+        .map(|_| {
+            let (u, v) = (rng.next_f32(), rng.next_f32());
+            let p = Vec3::new(0.45 + 0.1 * u * u, 0.0, 0.45 + 0.1 * v);
+            record(p, &mut rng)
+        })
+        .collect();
+    records.extend((0..60).map(|i| {
+        let x = if i % 2 == 0 { 0.0 } else { 1.0 };
+        let p = Vec3::new(x, rng.next_f32(), rng.next_f32());
+        record(p, &mut rng)
+    }));
+    let map = PhotonMap::build(&records);
+    let mut out = Vec::new();
+    for _ in 0..40 {
+        let p = Vec3::new(rng.next_f32(), 1.0, rng.next_f32());
+        for k in [1, 50, 200] {
+            map.nearest_k(p, k, f32::INFINITY, &mut out);
+            check_knn(&map, p, k, f32::INFINITY, &out);
+        }
+        map.within_radius(p, 1.0, &mut out);
+        check_within(&map, p, 1.0, &out);
+    }
+    check_queries(&map, 13, 20);
+}
+
 #[test]
 fn all_equal_points_are_all_at_distance_zero() {
     let mut rng = Rng::new(4);
