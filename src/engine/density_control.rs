@@ -185,12 +185,19 @@ impl DensityControl {
                 (self.table[s].0 == key).then_some(s)
             });
             for s in cells.into_iter().flatten() {
-                for e in &self.table[s].1 {
+                let cell = &self.table[s].1;
+                // Every photon is written and the count moves only for
+                // those that pass: no branch on a test that passes one
+                // time in five, at random.
+                let mut w = self.candidates.len();
+                self.candidates.resize(w + cell.len(), (0.0, 0, 0, false));
+                for e in cell {
                     let d2 = (e.position - rec.position).length_squared();
-                    if d2 <= self.radius2 && e.direction.dot(n) < 0.0 {
-                        self.candidates.push((d2, e.index, e.depth, e.caustic));
-                    }
+                    let pass = (d2 <= self.radius2) & (e.direction.dot(n) < 0.0);
+                    self.candidates[w] = (d2, e.index, e.depth, e.caustic);
+                    w += pass as usize;
                 }
+                self.candidates.truncate(w);
             }
             if self.candidates.len() >= self.k {
                 // Dense enough: hand the power to the nearest of the same
