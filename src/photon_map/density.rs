@@ -42,18 +42,27 @@ pub fn density_at_facing(
     k: usize,
     scratch: &mut Vec<Neighbor>,
 ) -> f32 {
-    if normal == Vec3::ZERO {
+    let found = if normal == Vec3::ZERO {
         // No side test: the plain search skips decoding every direction.
-        map.nearest_k(p, k, f32::INFINITY, scratch);
+        map.kth_nearest_where(p, k, scratch, |_| true)
     } else {
-        map.nearest_k_facing(p, normal, k, f32::INFINITY, scratch);
-    }
-    let Some(last) = scratch.last() else {
+        map.kth_nearest_where(p, k, scratch, |c| {
+            // As `PhotonMap::nearest_k_facing` tests the side.
+            c.direction_unnormalised().dot(normal) <= 0.0
+        })
+    };
+    density_of(map, found)
+}
+
+/// `found / (pi r^2)` from the count and squared distance of the farthest
+/// of the neighbours found, `r` at least one quantisation step.
+fn density_of(map: &PhotonMap, found: Option<(usize, f32)>) -> f32 {
+    let Some((count, dist2)) = found else {
         return 0.0;
     };
     let step = map.quantizer().step();
-    let r2 = (last.dist2 as f64).max(step * step);
-    (scratch.len() as f64 / (PI * r2)) as f32
+    let r2 = (dist2 as f64).max(step * step);
+    (count as f64 / (PI * r2)) as f32
 }
 
 /// Summary of the density over a set of evaluation points.
@@ -94,17 +103,12 @@ pub fn density_stats_where<F>(map: &PhotonMap, points: &[Vec3], k: usize, accept
 where
     F: Fn(&crate::photon_map::CompactPhoton) -> bool + Sync,
 {
-    let step = map.quantizer().step();
     let densities: Vec<f64> = points
         .par_iter()
         .map_init(Vec::new, |scratch, &p| {
-            map.nearest_k_where(p, k, f32::INFINITY, scratch, &accept);
-            scratch.last().map_or(0.0, |last| {
-                let r2 = (last.dist2 as f64).max(step * step);
-                // As `density_at` computes it, so the values match a map
-                // built from the accepted photons alone.
-                (scratch.len() as f64 / (PI * r2)) as f32 as f64
-            })
+            // As `density_at` computes it, so the values match a map built
+            // from the accepted photons alone.
+            density_of(map, map.kth_nearest_where(p, k, scratch, &accept)) as f64
         })
         .collect();
     summarize(&densities)

@@ -59,6 +59,39 @@ impl PhotonMap {
     ) where
         F: Fn(&CompactPhoton) -> bool,
     {
+        self.search_k(p, k, max_radius, out, accept);
+        sort_neighbors(out);
+        for n in out.iter_mut() {
+            n.dist2 = self.quant.world_dist2(n.dist2);
+        }
+    }
+
+    /// How many of the `k` nearest photons that `accept` keeps were found,
+    /// and the squared world distance of the farthest (`None` when none
+    /// was): what a density estimate reads of [`PhotonMap::nearest_k_where`],
+    /// with the same values, without sorting the neighbours. `scratch` is
+    /// reused between calls.
+    pub fn kth_nearest_where<F>(
+        &self,
+        p: Vec3,
+        k: usize,
+        scratch: &mut Vec<Neighbor>,
+        accept: F,
+    ) -> Option<(usize, f32)>
+    where
+        F: Fn(&CompactPhoton) -> bool,
+    {
+        self.search_k(p, k, f32::INFINITY, scratch, accept);
+        // The heap's root is its farthest entry.
+        let far = scratch.first()?;
+        Some((scratch.len(), self.quant.world_dist2(far.dist2)))
+    }
+
+    /// The k-nearest search: `out` is left a max-heap on grid distance.
+    fn search_k<F>(&self, p: Vec3, k: usize, max_radius: f32, out: &mut Vec<Neighbor>, accept: F)
+    where
+        F: Fn(&CompactPhoton) -> bool,
+    {
         out.clear();
         if k == 0 || self.is_empty() || !p.is_finite() || max_radius.is_nan() || max_radius < 0.0 {
             return;
@@ -78,10 +111,6 @@ impl PhotonMap {
         }
         let off = self.root_gap(&search.q);
         search.visit(&self.photons, 0, off, 0);
-        sort_neighbors(out);
-        for n in out.iter_mut() {
-            n.dist2 = self.quant.world_dist2(n.dist2);
-        }
     }
 
     /// Every photon within `radius` of `p` (inclusive), written to `out` (cleared
