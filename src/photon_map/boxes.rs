@@ -32,13 +32,7 @@ pub(crate) type GridBox = [[f32; 3]; 2];
 /// than [`BOX_MIN`] photons. A right sibling has at most one photon fewer
 /// per level than its left, so every slot is an inner node.
 pub(crate) fn slots(n: usize) -> usize {
-    let mut levels = 0;
-    let mut m = n;
-    while m > BOX_MIN {
-        levels += 1;
-        m /= 2;
-    }
-    (1usize << levels) - 1
+    super::stems::slots_above(n, BOX_MIN)
 }
 
 /// Where the build writes the boxes it computes, from any thread: each slot

@@ -142,19 +142,9 @@ impl PhotonMap {
 
 impl PhotonMap {
     /// Per-axis gaps from `q` (grid units) to the photons' bounding box: the
-    /// root's region. A subtraction of the same values as [`dist2`]'s, so the
-    /// bound never exceeds a photon's distance.
+    /// root's region ([`boxes::gaps`], the same subtraction as [`dist2`]'s).
     fn root_gap(&self, q: &[f32; 3]) -> [f32; 3] {
-        let [lo, hi] = &self.bounds;
-        [0, 1, 2].map(|a| {
-            if q[a] < lo[a] {
-                lo[a] - q[a]
-            } else if q[a] > hi[a] {
-                q[a] - hi[a]
-            } else {
-                0.0
-            }
-        })
+        boxes::gaps(&self.bounds, q)
     }
 }
 

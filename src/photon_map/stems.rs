@@ -36,9 +36,15 @@ pub(crate) fn split(stem: u32) -> (usize, u32) {
 /// sibling (`n / 2` against `n - n / 2 - 1`), so the leftmost path is the
 /// deepest.
 fn slots(n: usize) -> usize {
+    slots_above(n, LEAF_SIZE)
+}
+
+/// `2^D - 1` breadth-first slots for the `D` levels of an `n`-photon tree
+/// whose leftmost (largest) subtree has more than `min` photons.
+pub(crate) fn slots_above(n: usize, min: usize) -> usize {
     let mut levels = 0;
     let mut m = n;
-    while m > LEAF_SIZE {
+    while m > min {
         levels += 1;
         m /= 2;
     }
