@@ -154,8 +154,8 @@ impl ImportanceConfig {
 }
 
 impl Default for ImportanceConfig {
-    /// 128 x 128 pixels at 4 samples, one gather ray (the render's
-    /// default), 4 later bounces, cells of 1/64 of the diagonal, the
+    /// 128 x 128 pixels at 4 samples, the render's default gather rays
+    /// per sample, 4 later bounces, cells of 1/64 of the diagonal, the
     /// scene's camera.
     fn default() -> Self {
         ImportanceConfig {

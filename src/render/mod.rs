@@ -189,9 +189,16 @@ pub const MAX_GATHER: u32 = 4096;
 /// Most light samples per camera sample accepted.
 pub const MAX_LIGHT_SAMPLES: u32 = 1024;
 
-/// Default final-gather rays per camera sample: one, stratified over the
-/// pixel's samples (64 spp gather 64 directions per pixel).
-pub const DEFAULT_GATHER: u32 = 1;
+/// Default final-gather rays per camera sample: two, stratified over the
+/// pixel's samples (64 spp gather 128 directions per pixel). On the Cornell
+/// box the gather's noise is most of the image's, and a second gather ray
+/// costs less than a second camera sample (no camera ray, no light sample):
+/// 3 % relRMSE at 256² took 96 spp and 2.74 s with two, 192 spp and 3.40 s
+/// with one (`bench render cornell --size 256 --n-max 300000 --final-gather
+/// G`, one session on an Intel Xeon: `docs/bench_render_gather2/`). Four
+/// or more per sample lose again to the pixel's own noise (edges, direct
+/// light) at the fewer samples.
+pub const DEFAULT_GATHER: u32 = 2;
 
 /// What the image shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

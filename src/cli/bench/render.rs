@@ -52,6 +52,12 @@ pub struct RenderBenchArgs {
     /// Light samples (shadow rays) per camera sample of the photon render.
     #[arg(long, default_value_t = RenderConfig::new(1, 1).light_samples)]
     pub light_samples: u32,
+    /// Final-gather rays per camera sample of the photon render.
+    #[arg(long, default_value_t = RenderConfig::new(1, 1).final_gather)]
+    pub final_gather: u32,
+    /// Photons per radiance estimate of the photon render (and its cache).
+    #[arg(long, default_value_t = RenderConfig::new(1, 1).k)]
+    pub k: usize,
     /// Seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -73,6 +79,8 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
     let pool = args.threads.pool()?;
     let mut render = RenderConfig::new(args.size, args.size);
     render.light_samples = args.light_samples;
+    render.final_gather = args.final_gather;
+    render.k = args.k;
     render.check()?;
     let cfg = StudyConfig {
         size: args.size,
@@ -100,6 +108,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
             "scene": args.scene, "cosn": args.cosn, "size": args.size,
             "threads": pool.current_num_threads(), "loadavg": load.trim(),
             "light_samples": args.light_samples,
+            "final_gather": args.final_gather, "k": args.k,
             "result": result, "direct": direct,
         }))?
     );

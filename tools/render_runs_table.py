@@ -1,0 +1,41 @@
+#!/usr/bin/env python3
+"""Markdown table of `adaptive-pm bench render` runs (their JSON outputs):
+per run, the photon render's settings, the fastest row that reached the
+target, the path tracer's extrapolated time and the ratio.
+
+Usage: python3 tools/render_runs_table.py RUN.json [RUN.json ...]
+"""
+import json
+import sys
+
+
+def fastest_reaching(rows, target):
+    hits = [r for r in rows if r["rel_rmse"] <= target]
+    return min(hits, key=lambda r: r["total_s"]) if hits else None
+
+
+def main(paths):
+    print("| run | final gather | k | N_MAX | spp | relRMSE | photon s | path s | photon / path | bias per channel |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for path in paths:
+        with open(path) as f:
+            d = json.load(f)
+        res = d["result"]
+        best = fastest_reaching(res["photon"], 0.03)
+        name = path.rsplit("/", 1)[-1].removesuffix(".json")
+        if best is None:
+            print(f"| {name} | {d['final_gather']} | {d['k']} | | | not reached | | | | |")
+            continue
+        bias = " / ".join(f"{100 * b:+.2f} %" for b in best["bias"])
+        path_s = res["path_time_to_target_s"]
+        print(
+            f"| {name} | {d['final_gather']} | {d['k']} | {best['n_max']} | {best['spp']} "
+            f"| {100 * best['rel_rmse']:.2f} % | {best['total_s']:.2f} | {path_s:.1f} "
+            f"| 1/{path_s / best['total_s']:.1f} | {bias} |"
+        )
+
+
+if __name__ == "__main__":
+    if len(sys.argv) < 2:
+        sys.exit(__doc__)
+    main(sys.argv[1:])
