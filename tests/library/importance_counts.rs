@@ -310,10 +310,21 @@ fn measure_rooms_with_a_gap() {
         }
         let rel: Vec<f64> = per_point.iter().map(|m| m.std_error() / m.mean()).collect();
         let mean_rel = rel.iter().sum::<f64>() / rel.len() as f64;
-        println!(
-            "{mode} importance {:?}: stored {stored}, {seconds:.2} s, power near points {:?}, rel. std error {mean_rel:.4}, x sqrt(stored) {:.2}, x sqrt(s) {:.4}",
+        eprintln!(
+            "{mode} importance {:?}: power near points {:?}",
             imp.map(|i| (i.width, i.height, i.spp)),
             per_point.iter().map(|m| m.mean()).collect::<Vec<_>>(),
+        );
+        // The table row of docs/method.md ("The importance pass").
+        let name = match imp {
+            None => mode.to_string(),
+            Some(i) => format!(
+                "{mode} + importance, pass {} x {} x {}",
+                i.width, i.height, i.spp
+            ),
+        };
+        println!(
+            "| {name} | {stored} | {mean_rel:.3} | {:.0} | {seconds:.2} | {:.3} |",
             mean_rel * (stored as f64).sqrt(),
             mean_rel * seconds.sqrt(),
         );
