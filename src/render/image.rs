@@ -171,14 +171,7 @@ impl Image {
     /// # Errors
     /// [`Error::Io`] when the folder is missing or the file cannot be written.
     pub fn write_exr(&self, path: impl AsRef<Path>) -> Result<()> {
-        let (w, h) = (self.width as usize, self.height as usize);
-        write_atomic(path.as_ref(), |tmp| {
-            exr::prelude::write_rgb_file(tmp, w, h, |x, y| {
-                let p = self.pixels[y * w + x];
-                (p.x, p.y, p.z)
-            })
-            .map_err(exr_io)
-        })
+        self.write_exr_tile(0, self.height, path)
     }
 
     /// Writes this image as rows `y0..` of a `width x full_height` image: an
@@ -198,12 +191,14 @@ impl Image {
             layer_position: Vec2(0, y0 as i32),
             ..LayerAttributes::default()
         };
-        let layer = Layer::new(
-            (w, self.height as usize),
-            attrs,
-            Encoding::FAST_LOSSLESS,
-            channels,
-        );
+        // Tiles are compressed in parallel; in increasing order they are
+        // also written in order, so the same image is the same file (with
+        // no order given, each tile went out as its worker finished it).
+        let encoding = Encoding {
+            line_order: LineOrder::Increasing,
+            ..Encoding::FAST_LOSSLESS
+        };
+        let layer = Layer::new((w, self.height as usize), attrs, encoding, channels);
         let mut img = exr::image::Image::from_layer(layer);
         img.attributes.display_window = IntegerBounds::new((0, 0), (w, full_height as usize));
         write_atomic(path.as_ref(), |tmp| {

@@ -362,6 +362,30 @@ fn tiny_render_round_trips_through_exr_and_is_deterministic() {
     assert_eq!(names.len(), 2);
 }
 
+/// The same image is the same file: an EXR's 64-pixel tiles are compressed
+/// in parallel, and they once went out in the order their workers finished
+/// them (four renders of one map gave four different files).
+#[test]
+fn the_same_image_writes_the_same_exr_bytes() {
+    let mut img = Image::new(300, 200).unwrap();
+    for (i, p) in img.pixels.iter_mut().enumerate() {
+        // Varied values, so the tiles' compressed sizes differ.
+        let v = (i as f32 * 0.618_034).fract();
+        *p = glam::Vec3::new(v, v * v, (i % 7) as f32);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = |k: usize| {
+        let path = dir.path().join(format!("img{k}.exr"));
+        img.write_exr(&path).unwrap();
+        std::fs::read(&path).unwrap()
+    };
+    let first = bytes(0);
+    for k in 1..8 {
+        assert!(bytes(k) == first, "write {k} differs from the first");
+    }
+    assert_eq!(Image::read_exr(dir.path().join("img0.exr")).unwrap(), img);
+}
+
 #[test]
 fn bad_sizes_and_paths_are_clear_errors_without_partial_files() {
     let device = Device::new().unwrap();
