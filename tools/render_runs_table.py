@@ -15,8 +15,8 @@ def fastest_reaching(rows, target):
 
 
 def main(paths):
-    print("| run | final gather | k | N_MAX | spp | relRMSE | photon s | path s | photon / path | bias per channel |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| run | final gather | k | N_MAX | spp | relRMSE | photon s | path s | photon / path | reruns' photon / path | median | bias per channel |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for path in paths:
         with open(path) as f:
             d = json.load(f)
@@ -24,14 +24,17 @@ def main(paths):
         best = fastest_reaching(res["photon"], 0.03)
         name = path.rsplit("/", 1)[-1].removesuffix(".json")
         if best is None:
-            print(f"| {name} | {d['final_gather']} | {d['k']} | | | not reached | | | | |")
+            print(f"| {name} | {d['final_gather']} | {d['k']} | | | not reached | | | | | | |")
             continue
         bias = " / ".join(f"{100 * b:+.2f} %" for b in best["bias"])
         path_s = res["path_time_to_target_s"]
+        reruns = ", ".join(f"1/{1 / r['ratio']:.1f}" for r in res.get("reruns", []))
+        median = res.get("median_ratio")
+        median = f"1/{1 / median:.1f}" if median else ""
         print(
             f"| {name} | {d['final_gather']} | {d['k']} | {best['n_max']} | {best['spp']} "
             f"| {100 * best['rel_rmse']:.2f} % | {best['total_s']:.2f} | {path_s:.1f} "
-            f"| 1/{path_s / best['total_s']:.1f} | {bias} |"
+            f"| 1/{path_s / best['total_s']:.1f} | {reruns} | {median} | {bias} |"
         )
 
 

@@ -32,7 +32,7 @@ use crate::error::{Error, Result};
 use crate::raycast::RayCaster;
 use crate::render::{
     light_pixels, mean_bias, relative_rmse_masked, render_path, render_with, specular_pixels,
-    Image, PathHalves, PathPart, RenderConfig, View,
+    Image, PathHalves, PathPart, RenderConfig, RenderMaps, View,
 };
 use crate::sampling::luminance;
 use crate::scene::PreparedScene;
@@ -70,6 +70,24 @@ pub struct StudyConfig {
     /// Render every budget once at this spp instead of searching (the bias
     /// sweep).
     pub fixed_spp: Option<u32>,
+    /// Times the fastest photon render at the target and the path tracer's
+    /// timed render this many more times, alternately ([`Rerun`]); 0: none.
+    pub reruns: u32,
+}
+
+/// One rerun of the fastest photon render at the target (its whole
+/// pipeline: trace, caustic pass, maps, render) and of the path tracer's
+/// timed render, one after the other, so that the ratio compares two times
+/// measured seconds apart on a machine whose speed drifts.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rerun {
+    /// The photon pipeline's seconds.
+    pub photon_s: f64,
+    /// The path tracer's seconds to the target (its timed render's, scaled
+    /// by `1/sqrt(spp)` as in [`StudyResult::path_time_to_target_s`]).
+    pub path_time_to_target_s: f64,
+    /// photon / path.
+    pub ratio: f64,
 }
 
 /// One photon render.
@@ -148,6 +166,12 @@ pub struct StudyResult {
     pub ratio: Option<f64>,
     /// The same over the caustic's pixels, when the image has any.
     pub caustic: Option<CausticResult>,
+    /// The fastest photon render at the target and the path tracer, timed
+    /// again ([`StudyConfig::reruns`]).
+    pub reruns: Vec<Rerun>,
+    /// The median of the reruns' and the first run's ratios (`None` without
+    /// reruns or without a render at the target).
+    pub median_ratio: Option<f64>,
 }
 
 /// The caustic's pixels (module docs): kept, first hit non-specular, and
@@ -374,6 +398,31 @@ pub fn run_study<C: RayCaster>(
             .min_by(f64::total_cmp)
     };
     let best = fastest(&|r| r.rel_rmse <= cfg.target);
+    let best_row = rows
+        .iter()
+        .filter(|r| r.rel_rmse <= cfg.target)
+        .min_by(|a, b| a.total_s.total_cmp(&b.total_s))
+        .cloned();
+    let mut reruns = Vec::new();
+    if let Some(row) = &best_row {
+        for i in 0..cfg.reruns {
+            let photon_s = time_photon_pipeline(tracer, &base, cfg, row)?;
+            let path_s = time_path(prepared, &base, cfg, &judge, &|_| {})?.time_to_target;
+            let rerun = Rerun {
+                photon_s,
+                path_time_to_target_s: path_s,
+                ratio: photon_s / path_s,
+            };
+            log(&format!(
+                "rerun {}: photon N_MAX {} at {} spp {photon_s:.2} s, path to target {path_s:.1} s, 1/{:.1}",
+                i + 1,
+                row.n_max,
+                row.spp,
+                1.0 / rerun.ratio
+            ));
+            reruns.push(rerun);
+        }
+    }
     let caustic = path.caustic.map(|(e, t)| {
         let best = fastest(&|r| r.caustic_rel_rmse.is_some_and(|c| c <= cfg.target));
         CausticResult {
@@ -396,7 +445,85 @@ pub fn run_study<C: RayCaster>(
         photon: rows,
         photon_time_to_target_s: best,
         ratio: best.map(|b| b / path.time_to_target),
+        median_ratio: median_ratio(best.map(|b| b / path.time_to_target), &reruns),
+        reruns,
     })
+}
+
+/// The median of the first run's ratio and the reruns'.
+fn median_ratio(first: Option<f64>, reruns: &[Rerun]) -> Option<f64> {
+    let first = first.filter(|_| !reruns.is_empty())?;
+    let mut all: Vec<f64> = std::iter::once(first)
+        .chain(reruns.iter().map(|r| r.ratio))
+        .collect();
+    all.sort_by(f64::total_cmp);
+    let mid = all.len() / 2;
+    Some(if all.len() % 2 == 1 {
+        all[mid]
+    } else {
+        0.5 * (all[mid - 1] + all[mid])
+    })
+}
+
+/// The whole photon pipeline of `row` timed again: trace, caustic pass,
+/// maps and the render at its spp.
+fn time_photon_pipeline<C: RayCaster>(
+    tracer: &Tracer<C>,
+    base: &RenderConfig,
+    cfg: &StudyConfig,
+    row: &PhotonRow,
+) -> Result<f64> {
+    let t = Instant::now();
+    let (maps, _) = photon_maps(tracer, base, cfg, (row.n_max, row.caustic_photons))?;
+    let mut c = base.clone();
+    c.spp = row.spp;
+    render_with(tracer.prepared(), Some(&maps), None, &c, &|_, _| {})?;
+    Ok(t.elapsed().as_secs_f64())
+}
+
+/// What [`photon_maps`] timed and counted.
+struct MapTimes {
+    trace_s: f64,
+    stored: usize,
+    caustic_s: f64,
+    caustic_stored: u64,
+    maps_s: f64,
+}
+
+/// A budget's trace, maps and caustic pass (`caustic` caustic photons, 0
+/// for none).
+fn photon_maps<C: RayCaster>(
+    tracer: &Tracer<C>,
+    base: &RenderConfig,
+    cfg: &StudyConfig,
+    (n_max, caustic): (u64, u64),
+) -> Result<(RenderMaps, MapTimes)> {
+    let mut tc = TraceConfig::new(cfg.mode, Budget::NMax(n_max));
+    tc.seed = cfg.seed;
+    let t = Instant::now();
+    let out = tracer.trace(&tc)?;
+    let trace_s = t.elapsed().as_secs_f64();
+    let stored = out.photons.len();
+    let mut maps = base.build_maps(out.photons, out.frame);
+    let (mut caustic_s, mut caustic_stored) = (0.0, 0);
+    if caustic > 0 {
+        let t = Instant::now();
+        let pass = tracer.trace_caustic(&tc, caustic)?;
+        caustic_stored = pass.report.stored;
+        let before = maps.build_caustic_s;
+        maps = maps.with_caustic_pass(pass);
+        // The pass's tree build is in `maps_s`.
+        caustic_s = t.elapsed().as_secs_f64() - (maps.build_caustic_s - before);
+    }
+    let maps_s = maps.build_total_s();
+    let times = MapTimes {
+        trace_s,
+        stored,
+        caustic_s,
+        caustic_stored,
+        maps_s,
+    };
+    Ok((maps, times))
 }
 
 /// One budget: trace and build the maps (timed), then render at `fixed_spp`,
@@ -413,25 +540,15 @@ fn photon_budget<C: RayCaster>(
     log: &dyn Fn(&str),
     rows: &mut Vec<PhotonRow>,
 ) -> Result<()> {
-    let mut tc = TraceConfig::new(cfg.mode, Budget::NMax(n_max));
-    tc.seed = cfg.seed;
-    let t = Instant::now();
-    let out = tracer.trace(&tc)?;
-    let trace_s = t.elapsed().as_secs_f64();
-    let stored = out.photons.len();
-    let mut maps = base.build_maps(out.photons, out.frame);
     let caustic_n = caustic.photons(tracer.scene(), n_max);
-    let (mut caustic_s, mut caustic_stored) = (0.0, 0);
-    if caustic_n > 0 {
-        let t = Instant::now();
-        let pass = tracer.trace_caustic(&tc, caustic_n)?;
-        caustic_stored = pass.report.stored;
-        let before = maps.build_caustic_s;
-        maps = maps.with_caustic_pass(pass);
-        // The pass's tree build is in `maps_s`.
-        caustic_s = t.elapsed().as_secs_f64() - (maps.build_caustic_s - before);
-    }
-    let maps_s = maps.build_total_s();
+    let (maps, times) = photon_maps(tracer, base, cfg, (n_max, caustic_n))?;
+    let MapTimes {
+        trace_s,
+        stored,
+        caustic_s,
+        caustic_stored,
+        maps_s,
+    } = times;
     let mut measure = |spp: u32| -> Result<bool> {
         let mut c = base.clone();
         c.spp = spp;
@@ -591,4 +708,28 @@ pub fn run_direct_study<C: RayCaster>(
         rows.push(row("photon", l, t.elapsed().as_secs_f64(), &img)?);
     }
     Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rerun(ratio: f64) -> Rerun {
+        Rerun {
+            photon_s: ratio,
+            path_time_to_target_s: 1.0,
+            ratio,
+        }
+    }
+
+    #[test]
+    fn the_median_takes_the_first_run_and_the_reruns() {
+        assert_eq!(median_ratio(Some(0.1), &[]), None);
+        assert_eq!(median_ratio(None, &[rerun(0.2)]), None);
+        assert_eq!(
+            median_ratio(Some(0.3), &[rerun(0.1), rerun(0.2)]),
+            Some(0.2)
+        );
+        assert_eq!(median_ratio(Some(0.4), &[rerun(0.1)]), Some(0.25));
+    }
 }

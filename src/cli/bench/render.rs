@@ -58,6 +58,11 @@ pub struct RenderBenchArgs {
     /// Photons per radiance estimate of the photon render (and its cache).
     #[arg(long, default_value_t = RenderConfig::new(1, 1).k)]
     pub k: usize,
+    /// Time the fastest photon render at the target and the path tracer
+    /// this many more times, one after the other, and report the median
+    /// ratio (2: the median of three runs).
+    #[arg(long, default_value_t = 0)]
+    pub reruns: u32,
     /// Seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -94,9 +99,17 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
         render,
         seed: args.seed,
         fixed_spp: args.fixed_spp,
+        reruns: args.reruns,
     };
     let log = |s: &str| eprintln!("{s}");
     let result = pool.install(|| run_study(&tracer, &cfg, &log))?;
+    if let Some(m) = result.median_ratio {
+        eprintln!(
+            "median over {} runs: photon / path = 1/{:.1}",
+            1 + result.reruns.len(),
+            1.0 / m
+        );
+    }
     let direct = match args.direct_spp {
         Some(spp) => Some(pool.install(|| run_direct_study(tracer.prepared(), &cfg, spp))?),
         None => None,
