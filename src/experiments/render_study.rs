@@ -397,32 +397,15 @@ pub fn run_study<C: RayCaster>(
             .map(|r| r.total_s)
             .min_by(f64::total_cmp)
     };
-    let best = fastest(&|r| r.rel_rmse <= cfg.target);
     let best_row = rows
         .iter()
         .filter(|r| r.rel_rmse <= cfg.target)
-        .min_by(|a, b| a.total_s.total_cmp(&b.total_s))
-        .cloned();
-    let mut reruns = Vec::new();
-    if let Some(row) = &best_row {
-        for i in 0..cfg.reruns {
-            let photon_s = time_photon_pipeline(tracer, &base, cfg, row)?;
-            let path_s = time_path(prepared, &base, cfg, &judge, &|_| {})?.time_to_target;
-            let rerun = Rerun {
-                photon_s,
-                path_time_to_target_s: path_s,
-                ratio: photon_s / path_s,
-            };
-            log(&format!(
-                "rerun {}: photon N_MAX {} at {} spp {photon_s:.2} s, path to target {path_s:.1} s, 1/{:.1}",
-                i + 1,
-                row.n_max,
-                row.spp,
-                1.0 / rerun.ratio
-            ));
-            reruns.push(rerun);
-        }
-    }
+        .min_by(|a, b| a.total_s.total_cmp(&b.total_s));
+    let best = best_row.map(|r| r.total_s);
+    let reruns = match best_row {
+        Some(row) => rerun(tracer, &base, cfg, &judge, row, log)?,
+        None => Vec::new(),
+    };
     let caustic = path.caustic.map(|(e, t)| {
         let best = fastest(&|r| r.caustic_rel_rmse.is_some_and(|c| c <= cfg.target));
         CausticResult {
@@ -448,6 +431,36 @@ pub fn run_study<C: RayCaster>(
         median_ratio: median_ratio(best.map(|b| b / path.time_to_target), &reruns),
         reruns,
     })
+}
+
+/// [`StudyConfig::reruns`] timings of `row`'s photon pipeline, each
+/// followed by the path tracer's timed render.
+fn rerun<C: RayCaster>(
+    tracer: &Tracer<C>,
+    base: &RenderConfig,
+    cfg: &StudyConfig,
+    judge: &Judge,
+    row: &PhotonRow,
+    log: &dyn Fn(&str),
+) -> Result<Vec<Rerun>> {
+    (1..=cfg.reruns)
+        .map(|i| {
+            let photon_s = time_photon_pipeline(tracer, base, cfg, row)?;
+            let path_s = time_path(tracer.prepared(), base, cfg, judge, &|_| {})?.time_to_target;
+            let ratio = photon_s / path_s;
+            log(&format!(
+                "rerun {i}: photon N_MAX {} at {} spp {photon_s:.2} s, path to target {path_s:.1} s, 1/{:.1}",
+                row.n_max,
+                row.spp,
+                1.0 / ratio
+            ));
+            Ok(Rerun {
+                photon_s,
+                path_time_to_target_s: path_s,
+                ratio,
+            })
+        })
+        .collect()
 }
 
 /// The median of the first run's ratio and the reruns'.
