@@ -1,5 +1,6 @@
 //! `adaptive-pm bench cornell` from the command line: `--json` prints exactly
 //! one JSON object, bad input fails with a clear message before any tracing.
+//! Also `bench render`'s reruns.
 
 use std::process::Command;
 
@@ -128,4 +129,52 @@ fn a_bad_scene_name_lists_the_built_in_names() {
         err.contains("cornell-empty") && err.contains("cornell,") && err.contains("cornel"),
         "{err}"
     );
+}
+
+/// `bench render --reruns 2`: the fastest photon render at the target and
+/// the path tracer timed twice more, each rerun's ratio and the median of
+/// the three in the JSON, with the gather and k it ran with.
+#[test]
+fn bench_render_reruns_report_their_ratios_and_median() {
+    let out = bin()
+        .args(["bench", "render", "cornell", "--size", "16"])
+        .args([
+            "--reference-spp",
+            "64",
+            "--path-spp",
+            "8",
+            "--n-max",
+            "3000",
+        ])
+        .args(["--max-spp", "64", "--target", "0.5", "--reruns", "2"])
+        .args(["--final-gather", "1", "--k", "40", "--threads", "1"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (v["final_gather"].as_u64(), v["k"].as_u64()),
+        (Some(1), Some(40))
+    );
+    let result = &v["result"];
+    let reruns = result["reruns"].as_array().unwrap();
+    assert_eq!(reruns.len(), 2);
+    let mut ratios: Vec<f64> = reruns
+        .iter()
+        .map(|r| r["ratio"].as_f64().unwrap())
+        .chain([result["ratio"].as_f64().unwrap()])
+        .collect();
+    for r in reruns {
+        let (p, t) = (
+            r["photon_s"].as_f64().unwrap(),
+            r["path_time_to_target_s"].as_f64().unwrap(),
+        );
+        assert!(p > 0.0 && t > 0.0 && (r["ratio"].as_f64().unwrap() - p / t).abs() < 1e-12);
+    }
+    ratios.sort_by(f64::total_cmp);
+    assert_eq!(result["median_ratio"].as_f64(), Some(ratios[1]));
 }
