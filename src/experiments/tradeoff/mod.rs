@@ -166,12 +166,16 @@ impl TradeoffConfig {
         self.render_config(self.spp, 1).check().map(drop)
     }
 
-    /// A render of this study's size: emitters hidden.
+    /// A render of this study's size: emitters hidden, one gather ray per
+    /// camera sample (the study's spp and reference were sized for one, and
+    /// the studies in `docs/tradeoff/` were measured with it; the render's
+    /// default is two).
     pub fn render_config(&self, spp: u32, seed: u64) -> crate::render::RenderConfig {
         let mut c = crate::render::RenderConfig::new(self.width, self.height);
         c.spp = spp;
         c.seed = seed;
         c.show_emitters = false;
+        c.final_gather = 1;
         c
     }
 }
