@@ -394,20 +394,17 @@ pub fn run_study<C: RayCaster>(
     let fastest = |reached: &dyn Fn(&PhotonRow) -> bool| {
         rows.iter()
             .filter(|r| reached(r))
-            .map(|r| r.total_s)
-            .min_by(f64::total_cmp)
+            .min_by(|a, b| a.total_s.total_cmp(&b.total_s))
     };
-    let best_row = rows
-        .iter()
-        .filter(|r| r.rel_rmse <= cfg.target)
-        .min_by(|a, b| a.total_s.total_cmp(&b.total_s));
+    let best_row = fastest(&|r| r.rel_rmse <= cfg.target);
     let best = best_row.map(|r| r.total_s);
     let reruns = match best_row {
         Some(row) => rerun(tracer, &base, cfg, &judge, row, log)?,
         None => Vec::new(),
     };
     let caustic = path.caustic.map(|(e, t)| {
-        let best = fastest(&|r| r.caustic_rel_rmse.is_some_and(|c| c <= cfg.target));
+        let best =
+            fastest(&|r| r.caustic_rel_rmse.is_some_and(|c| c <= cfg.target)).map(|r| r.total_s);
         CausticResult {
             pixels: judge.caustic_count,
             reference_noise: judge.caustic_noise,

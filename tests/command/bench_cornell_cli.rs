@@ -2,25 +2,32 @@
 //! one JSON object, bad input fails with a clear message before any tracing.
 //! Also `bench render`'s reruns.
 
-use std::process::Command;
+use std::process::{Command, Output};
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_adaptive-pm"))
 }
 
-#[test]
-fn json_prints_one_object_with_the_runs() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = bin()
-        .args(["bench", "cornell", "--n-sweep", "0,50", "--n-max", "2000"])
-        .args(["--modes", "classic,adaptive", "--json", "--out"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
+/// Runs `cmd`, asserts it succeeded (its stderr the message) and returns
+/// its output.
+fn run_ok(cmd: &mut Command) -> Output {
+    let out = cmd.output().unwrap();
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+#[test]
+fn json_prints_one_object_with_the_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run_ok(
+        bin()
+            .args(["bench", "cornell", "--n-sweep", "0,50", "--n-max", "2000"])
+            .args(["--modes", "classic,adaptive", "--json", "--out"])
+            .arg(dir.path()),
     );
     let text = String::from_utf8(out.stdout).unwrap();
     let mut objects = serde_json::Deserializer::from_str(&text).into_iter::<serde_json::Value>();
@@ -90,16 +97,11 @@ fn an_unwritable_output_folder_is_an_error_before_tracing() {
 fn scene_from_a_file_is_named_in_the_output() {
     let dir = tempfile::tempdir().unwrap();
     let file = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/cornell_box.gltf");
-    let out = bin()
-        .args(["bench", "cornell", "--n-sweep", "10", "--n-max", "2000"])
-        .args(["--modes", "adaptive", "--json", "--scene", file, "--out"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = run_ok(
+        bin()
+            .args(["bench", "cornell", "--n-sweep", "10", "--n-max", "2000"])
+            .args(["--modes", "adaptive", "--json", "--scene", file, "--out"])
+            .arg(dir.path()),
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["scene"], file);
@@ -136,24 +138,19 @@ fn a_bad_scene_name_lists_the_built_in_names() {
 /// the three in the JSON, with the gather and k it ran with.
 #[test]
 fn bench_render_reruns_report_their_ratios_and_median() {
-    let out = bin()
-        .args(["bench", "render", "cornell", "--size", "16"])
-        .args([
-            "--reference-spp",
-            "64",
-            "--path-spp",
-            "8",
-            "--n-max",
-            "3000",
-        ])
-        .args(["--max-spp", "64", "--target", "0.5", "--reruns", "2"])
-        .args(["--final-gather", "1", "--k", "40", "--threads", "1"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = run_ok(
+        bin()
+            .args(["bench", "render", "cornell", "--size", "16"])
+            .args([
+                "--reference-spp",
+                "64",
+                "--path-spp",
+                "8",
+                "--n-max",
+                "3000",
+            ])
+            .args(["--max-spp", "64", "--target", "0.5", "--reruns", "2"])
+            .args(["--final-gather", "1", "--k", "40", "--threads", "1"]),
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
