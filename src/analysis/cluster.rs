@@ -35,7 +35,8 @@ pub fn cluster(dirs: &[Vec3], values: &[f32], variance_limit: f64) -> Vec<Vec<u3
     let mut c = Live::new(dirs, values);
     let mut groups = Vec::new();
     while c.len > 0 {
-        // The highest-valued sample left seeds the next group.
+        // The highest-valued sample left seeds the next group (a scan per
+        // group: there are few groups, so it costs less than a sort).
         let mut seed = 0;
         for k in 1..c.len {
             if c.v[k] > c.v[seed] || (c.v[k] == c.v[seed] && c.id[k] < c.id[seed]) {
@@ -43,7 +44,8 @@ pub fn cluster(dirs: &[Vec3], values: &[f32], variance_limit: f64) -> Vec<Vec<u3
             }
         }
         let (sv, s) = (c.v[seed], c.dir(seed));
-        let mut group = vec![c.id[seed]];
+        let mut group = Vec::with_capacity(c.len);
+        group.push(c.id[seed]);
         c.remove(seed);
         let (mut s1, mut s2) = (sv as f64, sv as f64 * sv as f64);
         let mut best = c.update(s, true);
@@ -66,102 +68,149 @@ pub fn cluster(dirs: &[Vec3], values: &[f32], variance_limit: f64) -> Vec<Vec<u3
     groups
 }
 
-/// The samples not yet in a group, as a struct of arrays whose first `len`
-/// entries are alive (removal swaps with the last alive entry), so every pass
-/// touches only live samples and vectorises.
+/// Lanes per block of [`Live`]: two SSE registers, or one AVX register.
+const L: usize = 8;
+
+/// A block of `L` lanes.
+type Block = [f32; L];
+
+/// The samples not yet in a group, as a struct of arrays of `L`-lane blocks
+/// whose first `len` lanes are alive (removal swaps with the last alive
+/// lane), so every pass touches only live samples, and fixed-size blocks
+/// let the compiler vectorise it without bounds checks.
 struct Live {
-    x: Vec<f32>,
-    y: Vec<f32>,
-    z: Vec<f32>,
+    x: Vec<Block>,
+    y: Vec<Block>,
+    z: Vec<Block>,
+    /// Cosine of the complete-linkage angle to the growing group.
+    min_dot: Vec<Block>,
     v: Vec<f32>,
     id: Vec<u32>,
-    /// Cosine of the complete-linkage angle to the growing group.
-    min_dot: Vec<f32>,
     len: usize,
+}
+
+fn lane(a: &[Block], k: usize) -> f32 {
+    a[k / L][k % L]
+}
+
+fn swap_lanes(a: &mut [Block], i: usize, j: usize) {
+    let t = lane(a, i);
+    a[i / L][i % L] = lane(a, j);
+    a[j / L][j % L] = t;
 }
 
 impl Live {
     fn new(dirs: &[Vec3], values: &[f32]) -> Self {
         let n = dirs.len().min(values.len());
-        let mut l = Live {
-            x: Vec::with_capacity(n),
-            y: Vec::with_capacity(n),
-            z: Vec::with_capacity(n),
-            v: Vec::with_capacity(n),
-            id: Vec::with_capacity(n),
-            min_dot: Vec::new(),
-            len: 0,
-        };
+        let (mut v, mut id) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        let mut live_dirs = Vec::with_capacity(n);
         for i in 0..n {
             if values[i] > DIFFUSE_LEVEL {
-                l.x.push(dirs[i].x);
-                l.y.push(dirs[i].y);
-                l.z.push(dirs[i].z);
-                l.v.push(values[i]);
-                l.id.push(i as u32);
+                live_dirs.push(dirs[i]);
+                v.push(values[i]);
+                id.push(i as u32);
             }
         }
-        l.len = l.id.len();
-        l.min_dot = vec![0.0; l.len];
-        l
+        let blocks = id.len().div_ceil(L);
+        let (mut x, mut y, mut z) = (
+            vec![[0.0; L]; blocks],
+            vec![[0.0; L]; blocks],
+            vec![[0.0; L]; blocks],
+        );
+        for (k, d) in live_dirs.iter().enumerate() {
+            x[k / L][k % L] = d.x;
+            y[k / L][k % L] = d.y;
+            z[k / L][k % L] = d.z;
+        }
+        Live {
+            x,
+            y,
+            z,
+            min_dot: vec![[0.0; L]; blocks],
+            len: id.len(),
+            v,
+            id,
+        }
     }
 
     fn dir(&self, k: usize) -> Vec3 {
-        Vec3::new(self.x[k], self.y[k], self.z[k])
+        Vec3::new(lane(&self.x, k), lane(&self.y, k), lane(&self.z, k))
     }
 
     fn remove(&mut self, k: usize) {
         let last = self.len - 1;
-        self.x.swap(k, last);
-        self.y.swap(k, last);
-        self.z.swap(k, last);
+        swap_lanes(&mut self.x, k, last);
+        swap_lanes(&mut self.y, k, last);
+        swap_lanes(&mut self.z, k, last);
+        swap_lanes(&mut self.min_dot, k, last);
         self.v.swap(k, last);
         self.id.swap(k, last);
-        self.min_dot.swap(k, last);
         self.len = last;
     }
 
     /// Folds the new member `d` into the linkage (`reset`: `d` is the seed)
     /// and returns the nearest live sample, ties to the lowest id.
     fn update(&mut self, d: Vec3, reset: bool) -> Option<usize> {
-        const L: usize = 8;
         let n = self.len;
-        let (x, y, z) = (&self.x[..n], &self.y[..n], &self.z[..n]);
-        let md = &mut self.min_dot[..n];
-        for k in 0..n {
-            let dot = d.x * x[k] + d.y * y[k] + d.z * z[k];
-            md[k] = if reset { dot } else { md[k].min(dot) };
+        if n == 0 {
+            return None;
         }
-        // The largest min-dot first, in a reduction over 8 lanes that the
-        // compiler vectorises (a min-dot is never NaN: unit vectors), then
-        // the lowest id among the samples that reach it (ties are rare), in
-        // the 8-sample chunks that hold one (a vectorised count per chunk:
-        // a scalar test of every sample was a third of the clustering).
+        let blocks = n.div_ceil(L);
+        // The linkage and the largest min-dot in one pass over the blocks.
+        // Lanes past `len` read -inf, so they are never the largest (a
+        // min-dot is never NaN: unit vectors).
         let mut lanes = [f32::NEG_INFINITY; L];
-        let mut chunks = md.chunks_exact(L);
-        for c in &mut chunks {
-            for j in 0..L {
-                lanes[j] = if c[j] > lanes[j] { c[j] } else { lanes[j] };
-            }
-        }
-        let top = chunks
-            .remainder()
+        let rows = self.x[..blocks]
             .iter()
-            .chain(&lanes)
-            .fold(f32::NEG_INFINITY, |a, &b| if b > a { b } else { a });
-        let mut best: Option<usize> = None;
-        let mut consider = |k: usize| {
-            if md[k] == top && best.is_none_or(|b| self.id[k] < self.id[b]) {
-                best = Some(k);
+            .zip(&self.y[..blocks])
+            .zip(&self.z[..blocks]);
+        for (b, (m, ((x, y), z))) in self.min_dot[..blocks].iter_mut().zip(rows).enumerate() {
+            // One step per loop over the lanes: the form that the compiler
+            // turns into vector instructions (a loop of all the steps per
+            // lane stayed scalar).
+            let mut dot = [0.0f32; L];
+            for j in 0..L {
+                dot[j] = d.x * x[j] + d.y * y[j] + d.z * z[j];
             }
-        };
-        for (c, chunk) in md.chunks_exact(L).enumerate() {
-            let hits: u32 = chunk.iter().map(|&m| u32::from(m == top)).sum();
-            if hits > 0 {
-                (c * L..(c + 1) * L).for_each(&mut consider);
+            // `min` without its NaN case (there is none), so that it is one
+            // instruction.
+            let mut linked = [0.0f32; L];
+            for j in 0..L {
+                linked[j] = if reset || dot[j] < m[j] { dot[j] } else { m[j] };
+            }
+            let live = n - b * L;
+            if live < L {
+                for v in linked.iter_mut().skip(live) {
+                    *v = f32::NEG_INFINITY;
+                }
+            }
+            *m = linked;
+            for j in 0..L {
+                lanes[j] = if linked[j] > lanes[j] {
+                    linked[j]
+                } else {
+                    lanes[j]
+                };
             }
         }
-        (n - n % L..n).for_each(consider);
+        let top = lanes
+            .iter()
+            .fold(f32::NEG_INFINITY, |a, &b| if b > a { b } else { a });
+        // Then the lowest id among the samples that reach it (ties are
+        // rare), in the blocks that hold one (a vectorised count per block:
+        // a scalar test of every sample was a third of the clustering).
+        let mut best: Option<usize> = None;
+        for (b, m) in self.min_dot[..blocks].iter().enumerate() {
+            if !m.iter().fold(false, |hit, &v| hit | (v == top)) {
+                continue;
+            }
+            for (j, &v) in m.iter().enumerate() {
+                let k = b * L + j;
+                if v == top && best.is_none_or(|bk| self.id[k] < self.id[bk]) {
+                    best = Some(k);
+                }
+            }
+        }
         best
     }
 }

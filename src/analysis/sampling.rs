@@ -61,10 +61,21 @@ impl Target<'_> {
         }
     }
 
-    fn sample(&self, u: [f32; 2]) -> Option<(Vec3, f32)> {
+    /// A sampled direction, the function's [`Self::value`] there and the
+    /// sampling pdf. A BRDF's value is the one its sampler weighed the
+    /// sample with (the same bits as `value` for the reflecting models;
+    /// rough glass evaluates it at the sampled microfacet normal, which
+    /// `value` recovers from the directions to within rounding), so that
+    /// `f` is not evaluated twice.
+    fn sample(&self, u: [f32; 2]) -> Option<(Vec3, f32, f32)> {
         match *self {
-            Target::CosN(n) => Some((cos_power_hemisphere(n, u), 0.0)),
-            Target::Brdf(b, wi) => b.sample(wi, u).map(|s| (s.wo, s.pdf)),
+            Target::CosN(n) => {
+                let w = cos_power_hemisphere(n, u);
+                Some((w, self.value(w), 0.0))
+            }
+            Target::Brdf(b, wi) => b
+                .sample_with_f(wi, u)
+                .map(|(s, f)| (s.wo, luminance(f).max(0.0), s.pdf)),
         }
     }
 
@@ -273,10 +284,10 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
     let mut set_ends = Vec::with_capacity(p.sets);
     for set in 0..p.sets {
         for u in points(&target, placement, set, p) {
-            if let Some((w, pdf)) = target.sample(u) {
+            if let Some((w, value, pdf)) = target.sample(u) {
                 if (w.z > 0.0 || domain == Domain::Sphere) && w.is_finite() {
                     dirs.push(w);
-                    raw.push(target.value(w));
+                    raw.push(value);
                     pdfs.push(pdf);
                 }
             }

@@ -138,6 +138,11 @@ impl CookTorrance {
 
     /// Samples the specular or the diffuse lobe (see the module docs).
     pub fn sample(&self, wi: Vec3, u: [f32; 2]) -> Option<BrdfSample> {
+        self.sample_with_f(wi, u).map(|(s, _)| s)
+    }
+
+    /// [`Self::sample`] and the value `f(wi, wo)` it was weighted with.
+    pub(crate) fn sample_with_f(&self, wi: Vec3, u: [f32; 2]) -> Option<(BrdfSample, Vec3)> {
         if wi.z <= 0.0 {
             return None;
         }
@@ -152,7 +157,8 @@ impl CookTorrance {
         if wo.z <= 0.0 {
             return None;
         }
-        super::weighted_sample(wo, self.pdf(wi, wo), self.eval(wi, wo))
+        let f = self.eval(wi, wo);
+        super::weighted_sample(wo, self.pdf(wi, wo), f).map(|s| (s, f))
     }
 
     /// Solid-angle pdf of [`CookTorrance::sample`].

@@ -166,6 +166,21 @@ impl Brdf {
         }
     }
 
+    /// [`Self::sample`] for photons, and the value `f(wi, wo)` the sample
+    /// was weighted with: the directionality analysis needs both, and the
+    /// models that evaluate `f` to weigh a sample need not do it twice.
+    pub(crate) fn sample_with_f(&self, wi: Vec3, u: [f32; 2]) -> Option<(BrdfSample, Vec3)> {
+        match self {
+            Brdf::Phong(b) => b.sample_with_f(wi, u),
+            Brdf::CookTorrance(b) => b.sample_with_f(wi, u),
+            Brdf::GltfPbr(b) => b.sample_with_f(wi, u),
+            Brdf::RoughDielectric(b) => b.sample_with_f(wi, u, Transport::Flux),
+            _ => self
+                .sample(wi, u)
+                .map(|s| (s, self.eval_in(wi, s.wo, Transport::Flux))),
+        }
+    }
+
     /// Solid-angle pdf of [`Brdf::sample`].
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         dispatch!(self, b => b.pdf(wi, wo))

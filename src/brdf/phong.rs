@@ -114,6 +114,11 @@ impl Phong {
 
     /// Samples the diffuse or the specular lobe (see the module docs).
     pub fn sample(&self, wi: Vec3, u: [f32; 2]) -> Option<BrdfSample> {
+        self.sample_with_f(wi, u).map(|(s, _)| s)
+    }
+
+    /// [`Self::sample`] and the value `f(wi, wo)` it was weighted with.
+    pub(crate) fn sample_with_f(&self, wi: Vec3, u: [f32; 2]) -> Option<(BrdfSample, Vec3)> {
         if wi.z <= 0.0 || (self.kd == Vec3::ZERO && self.ks == Vec3::ZERO) {
             return None;
         }
@@ -127,7 +132,8 @@ impl Phong {
         if wo.z <= 0.0 {
             return None;
         }
-        super::weighted_sample(wo, self.pdf(wi, wo), self.eval(wi, wo))
+        let f = self.eval(wi, wo);
+        super::weighted_sample(wo, self.pdf(wi, wo), f).map(|s| (s, f))
     }
 
     /// Solid-angle pdf of [`Phong::sample`].

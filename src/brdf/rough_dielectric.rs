@@ -299,16 +299,29 @@ impl RoughDielectric {
     /// grazing or non-finite `wi` and for a direction that ends on the wrong
     /// side.
     pub fn sample(&self, wi: Vec3, u: [f32; 2], mode: Transport) -> Option<BrdfSample> {
+        self.sample_with_f(wi, u, mode).map(|(s, _)| s)
+    }
+
+    /// [`Self::sample`] and the value `f(wi, wo)` it was weighted with
+    /// (the sampled microfacet normal's, which [`Self::eval`] recovers from
+    /// the directions to within rounding; `tint` for a pass-through).
+    pub(crate) fn sample_with_f(
+        &self,
+        wi: Vec3,
+        u: [f32; 2],
+        mode: Transport,
+    ) -> Option<(BrdfSample, Vec3)> {
         if !wi.is_finite() || wi.z == 0.0 {
             return None;
         }
         if self.is_delta() {
-            return Some(BrdfSample {
+            let s = BrdfSample {
                 wo: -wi,
                 weight: self.tint,
                 pdf: 0.0,
                 specular: true,
-            });
+            };
+            return Some((s, self.tint));
         }
         let m = self.ggx.sample_m(wi, u);
         let im = wi.dot(m);
@@ -338,12 +351,13 @@ impl RoughDielectric {
             return None;
         }
         let weight = f * (wo.z.abs() / pdf);
-        weight.is_finite().then_some(BrdfSample {
+        let s = BrdfSample {
             wo,
             weight,
             pdf,
             specular: false,
-        })
+        };
+        weight.is_finite().then_some((s, f))
     }
 
     /// Directional albedo from `wi` (either side): the reflected plus
