@@ -99,6 +99,25 @@ fn swap_lanes(a: &mut [Block], i: usize, j: usize) {
     a[j / L][j % L] = t;
 }
 
+/// One block of the linkage: `min(m, d . w)` per lane (`d . w` alone when
+/// `reset`), written one step per loop over the lanes, the form that the
+/// compiler turns into vector instructions (one loop of every step per lane
+/// stayed scalar). `min` is written without its NaN case (there is none),
+/// so that it is one instruction.
+#[inline(always)]
+fn link(m: &Block, [x, y, z]: [&Block; 3], d: Vec3, reset: bool) -> Block {
+    let mut dot = [0.0f32; L];
+    for j in 0..L {
+        dot[j] = d.x * x[j] + d.y * y[j] + d.z * z[j];
+    }
+    if !reset {
+        for j in 0..L {
+            dot[j] = if dot[j] < m[j] { dot[j] } else { m[j] };
+        }
+    }
+    dot
+}
+
 impl Live {
     fn new(dirs: &[Vec3], values: &[f32]) -> Self {
         let n = dirs.len().min(values.len());
@@ -155,36 +174,21 @@ impl Live {
         if n == 0 {
             return None;
         }
+        // The linkage and the largest min-dot in one pass over the blocks:
+        // the full blocks, then the last one, whose lanes past `len` are
+        // set to -inf so that they are never the largest (a min-dot is never
+        // NaN: unit vectors).
+        let (full, tail) = (n / L, n % L);
         let blocks = n.div_ceil(L);
-        // The linkage and the largest min-dot in one pass over the blocks.
-        // Lanes past `len` read -inf, so they are never the largest (a
-        // min-dot is never NaN: unit vectors).
+        let (x, y, z) = (&self.x[..blocks], &self.y[..blocks], &self.z[..blocks]);
+        let md = &mut self.min_dot[..blocks];
         let mut lanes = [f32::NEG_INFINITY; L];
-        let rows = self.x[..blocks]
-            .iter()
-            .zip(&self.y[..blocks])
-            .zip(&self.z[..blocks]);
-        for (b, (m, ((x, y), z))) in self.min_dot[..blocks].iter_mut().zip(rows).enumerate() {
-            // One step per loop over the lanes: the form that the compiler
-            // turns into vector instructions (a loop of all the steps per
-            // lane stayed scalar).
-            let mut dot = [0.0f32; L];
-            for j in 0..L {
-                dot[j] = d.x * x[j] + d.y * y[j] + d.z * z[j];
+        for b in 0..blocks {
+            let mut linked = link(&md[b], [&x[b], &y[b], &z[b]], d, reset);
+            if b == full {
+                linked[tail..].fill(f32::NEG_INFINITY);
             }
-            // `min` without its NaN case (there is none), so that it is one
-            // instruction.
-            let mut linked = [0.0f32; L];
-            for j in 0..L {
-                linked[j] = if reset || dot[j] < m[j] { dot[j] } else { m[j] };
-            }
-            let live = n - b * L;
-            if live < L {
-                for v in linked.iter_mut().skip(live) {
-                    *v = f32::NEG_INFINITY;
-                }
-            }
-            *m = linked;
+            md[b] = linked;
             for j in 0..L {
                 lanes[j] = if linked[j] > lanes[j] {
                     linked[j]
