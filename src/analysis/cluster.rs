@@ -206,12 +206,7 @@ impl Live {
         let (x, y, z) = (&self.x[..blocks], &self.y[..blocks], &self.z[..blocks]);
         let md = &mut self.min_dot[..blocks];
         let mut lanes = [f32::NEG_INFINITY; L];
-        for b in 0..blocks {
-            let mut linked = link(&md[b], [&x[b], &y[b], &z[b]], d, reset);
-            if b == full {
-                linked[tail..].fill(f32::NEG_INFINITY);
-            }
-            md[b] = linked;
+        let mut fold_max = |linked: &Block| {
             for j in 0..L {
                 lanes[j] = if linked[j] > lanes[j] {
                     linked[j]
@@ -219,6 +214,16 @@ impl Live {
                     lanes[j]
                 };
             }
+        };
+        for b in 0..full {
+            md[b] = link(&md[b], [&x[b], &y[b], &z[b]], d, reset);
+            fold_max(&md[b]);
+        }
+        if tail > 0 {
+            let mut linked = link(&md[full], [&x[full], &y[full], &z[full]], d, reset);
+            linked[tail..].fill(f32::NEG_INFINITY);
+            md[full] = linked;
+            fold_max(&linked);
         }
         let top = lanes
             .iter()
