@@ -33,7 +33,7 @@ pub const DIFFUSE_LEVEL: f32 = 1.0 / (2.0 * std::f32::consts::PI);
 /// shorter.
 pub fn cluster(dirs: &[Vec3], values: &[f32], variance_limit: f64) -> Vec<Vec<u32>> {
     let mut c = Live::new(dirs, values);
-    let mut groups = Vec::new();
+    let mut groups = Vec::with_capacity(8);
     while c.len > 0 {
         let seed = c.seed();
         let (sv, s) = (c.v[seed], c.dir(seed));
@@ -115,24 +115,21 @@ impl Live {
     fn new(dirs: &[Vec3], values: &[f32]) -> Self {
         let n = dirs.len().min(values.len());
         let (mut v, mut id) = (Vec::with_capacity(n), Vec::with_capacity(n));
-        let mut live_dirs = Vec::with_capacity(n);
-        for i in 0..n {
-            if values[i] > DIFFUSE_LEVEL {
-                live_dirs.push(dirs[i]);
-                v.push(values[i]);
-                id.push(i as u32);
-            }
-        }
-        let blocks = id.len().div_ceil(L);
+        let blocks = n.div_ceil(L);
         let (mut x, mut y, mut z) = (
             vec![[0.0; L]; blocks],
             vec![[0.0; L]; blocks],
             vec![[0.0; L]; blocks],
         );
-        for (k, d) in live_dirs.iter().enumerate() {
-            x[k / L][k % L] = d.x;
-            y[k / L][k % L] = d.y;
-            z[k / L][k % L] = d.z;
+        for i in 0..n {
+            if values[i] > DIFFUSE_LEVEL {
+                let k = id.len();
+                x[k / L][k % L] = dirs[i].x;
+                y[k / L][k % L] = dirs[i].y;
+                z[k / L][k % L] = dirs[i].z;
+                v.push(values[i]);
+                id.push(i as u32);
+            }
         }
         Live {
             x,

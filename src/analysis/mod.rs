@@ -202,7 +202,17 @@ fn peaks_of(
         // One side (every hemisphere's set): no copies.
         return keep(dirs, phis, values);
     }
-    let (above, below): (Vec<usize>, Vec<usize>) = (0..dirs.len()).partition(|&i| dirs[i].z >= 0.0);
+    let (mut above, mut below) = (
+        Vec::with_capacity(dirs.len()),
+        Vec::with_capacity(dirs.len()),
+    );
+    for (i, d) in dirs.iter().enumerate() {
+        if d.z >= 0.0 {
+            above.push(i)
+        } else {
+            below.push(i)
+        }
+    }
     [above, below]
         .into_iter()
         .filter(|side| !side.is_empty())
