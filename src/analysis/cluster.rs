@@ -26,18 +26,22 @@ pub const DIFFUSE_LEVEL: f32 = 1.0 / (2.0 * std::f32::consts::PI);
 /// `variance_limit` is the absolute bound on the variance of values inside a
 /// group (the caller passes 15 % of the global variance). Ties between
 /// equally near samples go to the lower index, so the result is
-/// deterministic.
+/// deterministic. Directions are unit vectors (a non-finite one leaves its
+/// sample in a group of its own or in none, never a panic).
 ///
 /// # Panics
 /// Never; `dirs` and `values` of different lengths are truncated to the
 /// shorter.
 pub fn cluster(dirs: &[Vec3], values: &[f32], variance_limit: f64) -> Vec<Vec<u32>> {
     let mut c = Live::new(dirs, values);
-    let mut groups = Vec::with_capacity(8);
+    let mut groups = Vec::new();
+    // The growing group, in one buffer for all of them: each group is
+    // copied out at its size (no regrowth, and O(m) memory in all).
+    let mut group = Vec::with_capacity(c.len);
     while c.len > 0 {
         let seed = c.seed();
         let (sv, s) = (c.v[seed], c.dir(seed));
-        let mut group = Vec::with_capacity(c.len);
+        group.clear();
         group.push(c.id[seed]);
         c.remove(seed);
         let (mut s1, mut s2) = (sv as f64, sv as f64 * sv as f64);
@@ -56,7 +60,7 @@ pub fn cluster(dirs: &[Vec3], values: &[f32], variance_limit: f64) -> Vec<Vec<u3
             c.remove(b);
             best = c.update(d, false);
         }
-        groups.push(group);
+        groups.push(group.clone());
     }
     groups
 }
@@ -143,7 +147,7 @@ impl Live {
     }
 
     /// The highest-valued live sample, ties to the lowest id: it seeds the
-    /// next group. The maximum over 8 lanes first, then the ids of the
+    /// next group. The maximum over `L` lanes first, then the ids of the
     /// samples that reach it (a scan per group, as there are few groups;
     /// one compare-and-branch per sample was a tenth of the analysis, by
     /// its mispredictions).
@@ -161,15 +165,15 @@ impl Live {
             .iter()
             .chain(&lanes)
             .fold(f32::NEG_INFINITY, |a, &b| if b > a { b } else { a });
-        let mut seed = 0;
-        let mut found = false;
+        let mut seed: Option<usize> = None;
         for (k, &value) in v.iter().enumerate() {
-            if value == top && (!found || self.id[k] < self.id[seed]) {
-                seed = k;
-                found = true;
+            if value == top && seed.is_none_or(|s| self.id[k] < self.id[s]) {
+                seed = Some(k);
             }
         }
-        seed
+        // Values are above the diffuse level, so never NaN: one reaches the
+        // top.
+        seed.unwrap_or(0)
     }
 
     fn dir(&self, k: usize) -> Vec3 {
@@ -235,7 +239,9 @@ impl Live {
             }
             for (j, &v) in m.iter().enumerate() {
                 let k = b * L + j;
-                if v == top && best.is_none_or(|bk| self.id[k] < self.id[bk]) {
+                // `k < n`: when no live min-dot beats -inf (NaN from a
+                // non-finite direction), a dead lane's -inf is the top.
+                if k < n && v == top && best.is_none_or(|bk| self.id[k] < self.id[bk]) {
                     best = Some(k);
                 }
             }
@@ -310,6 +316,52 @@ mod tests {
                 .collect();
             for limit in [0.01, 0.1, 1.0] {
                 assert_eq!(cluster(&dirs, &values, limit), brute(&dirs, &values, limit));
+            }
+        }
+    }
+
+    /// The 8-lane blocks at their edges: no sample, fewer than a block, whole
+    /// blocks and one past them, ties of equal values and directions.
+    #[test]
+    fn fast_equals_brute_force_at_block_edges() {
+        let mut r = Rng::new(9);
+        for n in [0usize, 1, 2, 7, 8, 9, 15, 16, 17, 24, 33] {
+            let mut dirs: Vec<Vec3> = (0..n).map(|_| uniform_hemisphere(r.next_2d())).collect();
+            let mut values: Vec<f32> = dirs.iter().map(|d| 0.2 + d.z * d.z).collect();
+            if n > 3 {
+                // Ties: a duplicated sample, and an equal value elsewhere.
+                dirs[n - 1] = dirs[0];
+                values[n - 1] = values[0];
+                values[n - 2] = values[1];
+            }
+            for limit in [0.001, 0.05, 1.0] {
+                assert_eq!(
+                    cluster(&dirs, &values, limit),
+                    brute(&dirs, &values, limit),
+                    "n {n}"
+                );
+            }
+        }
+    }
+
+    /// A non-finite direction never panics nor puts a sample in two groups.
+    #[test]
+    fn non_finite_directions_do_not_break_the_groups() {
+        let mut r = Rng::new(3);
+        for bad in [Vec3::NAN, Vec3::new(f32::INFINITY, 0.0, 1.0)] {
+            for n in [1usize, 5, 8, 13] {
+                let mut dirs: Vec<Vec3> = (0..n).map(|_| uniform_hemisphere(r.next_2d())).collect();
+                let values = vec![0.5; n];
+                for k in 0..n {
+                    dirs[k] = bad;
+                    let groups = cluster(&dirs, &values, 1.0);
+                    let mut ids: Vec<u32> = groups.concat();
+                    ids.sort_unstable();
+                    let len = ids.len();
+                    ids.dedup();
+                    assert_eq!(ids.len(), len, "a sample in two groups: n {n}, bad {bad}");
+                    assert!(ids.iter().all(|&i| (i as usize) < n));
+                }
             }
         }
     }

@@ -304,7 +304,8 @@ impl RoughDielectric {
 
     /// [`Self::sample`] and the value `f(wi, wo)` it was weighted with
     /// (the sampled microfacet normal's, which [`Self::eval`] recovers from
-    /// the directions to within rounding; `tint` for a pass-through).
+    /// the directions to within rounding; 0 for a pass-through, a delta, as
+    /// `eval` gives).
     pub(crate) fn sample_with_f(
         &self,
         wi: Vec3,
@@ -321,7 +322,7 @@ impl RoughDielectric {
                 pdf: 0.0,
                 specular: true,
             };
-            return Some((s, self.tint));
+            return Some((s, Vec3::ZERO));
         }
         let m = self.ggx.sample_m(wi, u);
         let im = wi.dot(m);
