@@ -115,6 +115,23 @@ fn link(m: &Block, [x, y, z]: [&Block; 3], d: Vec3, reset: bool) -> Block {
     dot
 }
 
+/// Each lane's running maximum raised by `values` (one per lane, at most
+/// `L`), as a select the compiler vectorises (no NaN case to handle: the
+/// values compared are never NaN, or a NaN never wins).
+#[inline(always)]
+fn raise_lanes(lanes: &mut Block, values: &[f32]) {
+    for (l, &v) in lanes.iter_mut().zip(values) {
+        *l = if v > *l { v } else { *l };
+    }
+}
+
+/// The largest of `values` (-inf for none; a NaN never wins).
+fn largest<'a>(values: impl IntoIterator<Item = &'a f32>) -> f32 {
+    values
+        .into_iter()
+        .fold(f32::NEG_INFINITY, |a, &b| if b > a { b } else { a })
+}
+
 impl Live {
     fn new(dirs: &[Vec3], values: &[f32]) -> Self {
         let n = dirs.len().min(values.len());
@@ -156,15 +173,9 @@ impl Live {
         let mut lanes = [f32::NEG_INFINITY; L];
         let mut chunks = v.chunks_exact(L);
         for c in &mut chunks {
-            for j in 0..L {
-                lanes[j] = if c[j] > lanes[j] { c[j] } else { lanes[j] };
-            }
+            raise_lanes(&mut lanes, c);
         }
-        let top = chunks
-            .remainder()
-            .iter()
-            .chain(&lanes)
-            .fold(f32::NEG_INFINITY, |a, &b| if b > a { b } else { a });
+        let top = largest(chunks.remainder().iter().chain(&lanes));
         let mut seed: Option<usize> = None;
         for (k, &value) in v.iter().enumerate() {
             if value == top && seed.is_none_or(|s| self.id[k] < self.id[s]) {
@@ -207,28 +218,17 @@ impl Live {
         let (x, y, z) = (&self.x[..blocks], &self.y[..blocks], &self.z[..blocks]);
         let md = &mut self.min_dot[..blocks];
         let mut lanes = [f32::NEG_INFINITY; L];
-        let mut fold_max = |linked: &Block| {
-            for j in 0..L {
-                lanes[j] = if linked[j] > lanes[j] {
-                    linked[j]
-                } else {
-                    lanes[j]
-                };
-            }
-        };
         for b in 0..full {
             md[b] = link(&md[b], [&x[b], &y[b], &z[b]], d, reset);
-            fold_max(&md[b]);
+            raise_lanes(&mut lanes, &md[b]);
         }
         if tail > 0 {
             let mut linked = link(&md[full], [&x[full], &y[full], &z[full]], d, reset);
             linked[tail..].fill(f32::NEG_INFINITY);
             md[full] = linked;
-            fold_max(&linked);
+            raise_lanes(&mut lanes, &linked);
         }
-        let top = lanes
-            .iter()
-            .fold(f32::NEG_INFINITY, |a, &b| if b > a { b } else { a });
+        let top = largest(&lanes);
         // Then the lowest id among the samples that reach it (ties are
         // rare), in the blocks that hold one (a vectorised count per block:
         // a scalar test of every sample was a third of the clustering).

@@ -88,7 +88,8 @@ fn by_fraction(holds: usize, total: usize) -> Verdict {
     }
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+/// The median of the finite values of `v` (NaN for none).
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v.retain(|x| x.is_finite());
     if v.is_empty() {
         return f64::NAN;

@@ -463,16 +463,8 @@ fn rerun<C: RayCaster>(
 /// The median of the first run's ratio and the reruns'.
 fn median_ratio(first: Option<f64>, reruns: &[Rerun]) -> Option<f64> {
     let first = first.filter(|_| !reruns.is_empty())?;
-    let mut all: Vec<f64> = std::iter::once(first)
-        .chain(reruns.iter().map(|r| r.ratio))
-        .collect();
-    all.sort_by(f64::total_cmp);
-    let mid = all.len() / 2;
-    Some(if all.len() % 2 == 1 {
-        all[mid]
-    } else {
-        0.5 * (all[mid - 1] + all[mid])
-    })
+    let all = std::iter::once(first).chain(reruns.iter().map(|r| r.ratio));
+    Some(super::claims::median(all.collect()))
 }
 
 /// The whole photon pipeline of `row` timed again: trace, caustic pass,
