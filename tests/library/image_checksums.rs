@@ -70,14 +70,23 @@ fn embree_tracer(name: &str, isa: Isa) -> Tracer<CommittedScene> {
 /// prints them on a mismatch; recorded on an Intel Xeon with AVX-512 and
 /// an AMD EPYC. AVX-512 is the same on every vendor (see `isa_pinning.rs`);
 /// the narrower sets are per vendor.
+///
+/// [`UNRECORDED`] marks an image that changed on purpose where only another
+/// vendor's machine could record it: the test prints its value there (to be
+/// recorded) and checks the image's other four.
 type Recorded = (Option<&'static str>, Isa, &'static str, [u64; 5]);
+
+/// An image not yet recorded on its vendor: the default render changed with
+/// the irradiance cache's kernel share (2026-12-05), recorded then on an
+/// Intel Xeon only.
+const UNRECORDED: u64 = 0;
 const RECORDED: &[Recorded] = &[
     (
         Some("AuthenticAMD"),
         Isa::Sse2,
         "cornell",
         [
-            0x8b67_d95c_ce2d_b630,
+            UNRECORDED, // was 0x8b67_d95c_ce2d_b630, before the kernel share
             0x9046_29c0_7be0_d2bb,
             0x288b_67aa_b7bc_2243,
             0x6f21_efa0_a969_ac15,
@@ -89,7 +98,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Sse2,
         "cornell-glass",
         [
-            0x2de4_f3e1_87c8_383d,
+            UNRECORDED, // was 0x2de4_f3e1_87c8_383d, before the kernel share
             0x188f_3cd0_93ed_c80d,
             0x22c0_07c7_c4ff_4be5,
             0x7d31_4770_115d_f392,
@@ -101,7 +110,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx2,
         "cornell",
         [
-            0x5b15_303c_7cb8_2700,
+            UNRECORDED, // was 0x5b15_303c_7cb8_2700, before the kernel share
             0x2b0e_e6fd_62a9_82f4,
             0x23ef_181f_734a_88b3,
             0x7bf4_13aa_e0b9_b558,
@@ -113,7 +122,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx2,
         "cornell-glass",
         [
-            0xa4fb_1615_d028_c581,
+            UNRECORDED, // was 0xa4fb_1615_d028_c581, before the kernel share
             0xced0_e949_2e66_37a0,
             0xe550_f68f_2c86_4a54,
             0xa4a7_cc85_4afe_6c5e,
@@ -125,7 +134,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Sse2,
         "cornell",
         [
-            0xaa40_de34_849b_b714,
+            0x1723_55f3_83a6_5978,
             0xd392_ae5f_cf25_5832,
             0xd1e8_9d4b_527f_ce9e,
             0x21a7_3131_5da6_2d84,
@@ -137,7 +146,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Sse2,
         "cornell-glass",
         [
-            0xfb20_4670_d368_96f1,
+            0x921a_2750_21bd_0dd2,
             0xe19d_978e_0c1b_28f6,
             0xd178_adc3_505a_1a63,
             0x4422_8fbf_cd9a_27b2,
@@ -149,7 +158,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx2,
         "cornell",
         [
-            0x8d7d_0166_e4c8_7cd0,
+            0xe8ba_c34d_bdd0_d2a9,
             0x43f7_f470_ef9e_c433,
             0x8bf2_5aa2_f039_5905,
             0xddd1_6012_a5f9_002e,
@@ -161,7 +170,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx2,
         "cornell-glass",
         [
-            0xfe19_0ce6_65d4_3f4b,
+            0xa546_7d45_dfb8_909c,
             0x9cfc_00b6_6ff6_7aef,
             0x1ebf_4aeb_3fdd_6fee,
             0xefdb_fecd_2b67_4307,
@@ -173,7 +182,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx512,
         "cornell",
         [
-            0xaf27_fab7_1353_41ac,
+            0xce94_198c_6840_a748,
             0xfef1_c0e4_f37c_ce91,
             0x0605_42eb_3124_8c84,
             0xb30d_e337_1801_ec7b,
@@ -185,7 +194,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx512,
         "cornell-glass",
         [
-            0xbe2d_f0b5_6e33_7726,
+            0xc227_f148_d33e_de32,
             0x133e_be17_baba_c39b,
             0xbf96_9617_d9e1_7b6d,
             0x9f14_6f8a_e7f9_9e7a,
@@ -202,7 +211,16 @@ fn pinned_images_have_the_recorded_checksums() {
         if !isa.is_supported() || who.is_some_and(|w| vendor.as_deref() != Some(w)) {
             continue;
         }
-        let got = images(&embree_tracer(name, isa)).map(|i| checksum(&i));
+        let mut got = images(&embree_tracer(name, isa)).map(|i| checksum(&i));
+        for (i, (g, e)) in got.iter_mut().zip(expected).enumerate() {
+            if e == UNRECORDED {
+                eprintln!(
+                    "{} {name} on {vendor:?}: image {i} is {g:#018x}, not yet recorded",
+                    isa.name()
+                );
+                *g = UNRECORDED;
+            }
+        }
         assert_eq!(
             got,
             expected,

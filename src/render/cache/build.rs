@@ -2,6 +2,7 @@
 //! cell, the coarse levels (see the parent module for the design and its
 //! bias).
 
+use super::support::kernel_share;
 use super::{
     to_rgbe, CacheConfig, IrradianceCache, Slot, LEVELS, PLANE_TOLERANCE, SAMPLES_PER_CELL,
 };
@@ -120,8 +121,12 @@ impl IrradianceCache {
         let values: Vec<FineCell> = groups
             .par_iter()
             .map_init(&scratch, |sc, g| {
-                let e = estimate(sc, samples[Self::pick(&samples, g) as usize]);
-                FineCell::new(e, cell, cfg.stride)
+                let sample = samples[Self::pick(&samples, g) as usize];
+                let e = estimate(sc, sample);
+                let (x, n, coin) = sample;
+                let rotation = (coin >> 40) as f32 * (1.0 / 16_777_216.0);
+                let share = kernel_share(rt, x, n, e.radius, plane, rotation);
+                FineCell::new(e, share, cell, cfg.stride)
             })
             .collect();
         cache.fill(&samples, &groups, &values);
@@ -213,12 +218,13 @@ struct FineCell {
 
 impl FineCell {
     /// The cell of side `cell` whose estimate is `e`, from the photons that
-    /// are not samples (one in `stride` is one).
-    fn new(e: Estimate, cell: f32, stride: u32) -> Self {
+    /// are not samples (one in `stride` is one), over a kernel whose disc
+    /// lies on the surface by `share` ([`kernel_share`]).
+    fn new(e: Estimate, share: f32, cell: f32, stride: u32) -> Self {
         // Expected samples in the cell: the non-samples' density from the
-        // kernel (`found` in `pi r^2`), over `stride - 1`, times the area.
-        let per_cell =
-            e.found as f32 * cell * cell / (PI * e.radius * e.radius * (stride - 1) as f32);
+        // kernel (`found` in `share pi r^2`), over `stride - 1`, times the area.
+        let disc = share * PI * e.radius * e.radius;
+        let per_cell = e.found as f32 * cell * cell / (disc * (stride - 1) as f32);
         let sparser = SAMPLES_PER_CELL / per_cell.max(1e-12);
         let level = if sparser > 1.0 {
             (0.5 * sparser.log2()).ceil()
@@ -227,7 +233,7 @@ impl FineCell {
         };
         let exists = -(-per_cell).exp_m1();
         FineCell {
-            value: e.value,
+            value: e.value / share,
             natural: level.min((LEVELS - 1) as f32) as u32,
             weight: 1.0 / exists.max(1e-6),
         }
