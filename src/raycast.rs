@@ -320,4 +320,22 @@ impl RayCaster for CheckedCaster<'_> {
     fn occluded(&self, ray: &Ray) -> bool {
         self.inner.occluded(ray)
     }
+
+    /// The inner caster's batch (its packets), each hit checked as
+    /// [`Self::intersect`] checks it.
+    fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        self.inner.intersect_batch(rays, hits);
+        for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
+            if let Some(h) = hit {
+                if let Err(bad) = h.check(ray, self.scene) {
+                    let _ = self.bad.set(bad);
+                    *hit = None;
+                }
+            }
+        }
+    }
+
+    fn occluded_batch(&self, rays: &[Ray], out: &mut [bool]) {
+        self.inner.occluded_batch(rays, out);
+    }
 }

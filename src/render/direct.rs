@@ -242,31 +242,41 @@ impl<'a> LightSampler<'a> {
     pub fn sample_with(
         &self,
         brdf: &Brdf,
-        [x, ng, n, wo]: [Vec3; 4],
+        pts: [Vec3; 4],
         eps: f32,
         u: [f32; 2],
         u_point: impl FnOnce() -> [f32; 2],
     ) -> Vec3 {
-        let Some((i, prob, u0)) = self.pick(x, n, u[0]) else {
-            return Vec3::ZERO;
-        };
-        let Some((source, le_g)) = self.sample_light(i, x, [u0, u[1]], u_point) else {
-            return Vec3::ZERO;
-        };
+        match self.unshadowed_with(brdf, pts, eps, u, u_point) {
+            Some((ray, l)) if !self.rt.occluded(&ray) => l,
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// [`Self::sample_with`] but for its shadow ray: the ray, and what
+    /// arrives when nothing blocks it (`None` when nothing would), so that
+    /// a caller can test many shadow rays in one batch.
+    pub(crate) fn unshadowed_with(
+        &self,
+        brdf: &Brdf,
+        [x, ng, n, wo]: [Vec3; 4],
+        eps: f32,
+        u: [f32; 2],
+        u_point: impl FnOnce() -> [f32; 2],
+    ) -> Option<(Ray, Vec3)> {
+        let (i, prob, u0) = self.pick(x, n, u[0])?;
+        let (source, le_g) = self.sample_light(i, x, [u0, u[1]], u_point)?;
         let wi = source.direction_from(x);
         let cos_x = wi.dot(n);
         if cos_x <= 0.0 || wi.dot(ng) <= 0.0 || le_g.max_element() <= 0.0 {
-            return Vec3::ZERO;
+            return None;
         }
         let frame = Frame::from_normal(n);
         let f = brdf.eval(frame.local_from_world(wi), frame.local_from_world(wo));
         if f.max_element() <= 0.0 {
-            return Vec3::ZERO;
+            return None;
         }
-        if self.rt.occluded(&source.shadow_ray(x + ng * eps)) {
-            return Vec3::ZERO;
-        }
-        f * le_g * (cos_x / prob)
+        Some((source.shadow_ray(x + ng * eps), f * le_g * (cos_x / prob)))
     }
 }
 

@@ -53,9 +53,32 @@ pub(super) trait PixelEstimator: Sync {
         row: &mut Self::Row,
     ) -> Vec3;
 
+    /// The radiance of `samples` (of one pixel, in order), each drawing
+    /// from its own stream in `rngs`, into `out`: what one
+    /// [`PixelEstimator::radiance`] per sample gives, which is the default.
+    /// An estimator overrides it to send the samples' rays to the caster in
+    /// batches.
+    fn radiance_batch(
+        &self,
+        rays: &CameraRays,
+        pixel: &Self::Pixel,
+        samples: &[Sample],
+        rngs: &mut [Rng],
+        row: &mut Self::Row,
+        out: &mut [Vec3],
+    ) {
+        for ((&sample, rng), l) in samples.iter().zip(rngs).zip(out) {
+            *l = self.radiance(rays, pixel, sample, rng, row);
+        }
+    }
+
     /// A row is finished; its counters are final.
     fn row_done(&self, row: Self::Row);
 }
+
+/// Samples of a pixel handed to [`PixelEstimator::radiance_batch`] at a
+/// time: a packet of camera rays as wide as AVX-512's.
+pub(super) const SAMPLES_PER_BATCH: u32 = 16;
 
 /// The jittered camera ray through `sample`'s pixel, from the point `jitter`
 /// in `[0, 1)^2`.
@@ -97,12 +120,26 @@ pub(super) fn develop<E: PixelEstimator>(
                 let pixel = estimator.pixel(key);
                 let mut sum = DVec3::ZERO;
                 let mut kept = 0;
-                for s in 0..cfg.spp {
-                    let mut rng = Rng::new(hash2(key, u64::from(s)));
-                    let sample = Sample { x: x as u32, y, s };
-                    let l = estimator.radiance(rays, &pixel, sample, &mut rng, &mut row);
+                for first in (0..cfg.spp).step_by(SAMPLES_PER_BATCH as usize) {
+                    let n = SAMPLES_PER_BATCH.min(cfg.spp - first) as usize;
+                    let samples: [Sample; SAMPLES_PER_BATCH as usize] =
+                        std::array::from_fn(|k| Sample {
+                            x: x as u32,
+                            y,
+                            s: first + k as u32,
+                        });
+                    let mut rngs = samples.map(|s| Rng::new(hash2(key, u64::from(s.s))));
+                    let mut out = [Vec3::ZERO; SAMPLES_PER_BATCH as usize];
+                    estimator.radiance_batch(
+                        rays,
+                        &pixel,
+                        &samples[..n],
+                        &mut rngs[..n],
+                        &mut row,
+                        &mut out[..n],
+                    );
                     // A NaN or infinite sample is dropped, not spread, and counted.
-                    if l.is_finite() {
+                    for l in out[..n].iter().filter(|l| l.is_finite()) {
                         sum += l.as_dvec3();
                         kept += 1;
                     }

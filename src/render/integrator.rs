@@ -2,6 +2,7 @@
 //! with its own counter-based random stream and the pixel's stratified
 //! points ([`super::sampler`]). The image loop is in [`super::film`].
 
+use super::batch::Batch;
 use super::cache::IrradianceCache;
 use super::direct::LightSampler;
 use super::estimate::{radiance_estimate, Lookup};
@@ -54,6 +55,8 @@ pub(super) struct SampleScratch {
     pub(super) misses: u64,
     /// The row's marks (empty unless the render marks its reads).
     pub(super) reads: RowReads,
+    /// The buffers of the row's batches of samples.
+    pub(super) batch: Batch,
 }
 
 impl SampleScratch {
@@ -65,6 +68,7 @@ impl SampleScratch {
             hits: 0,
             misses: 0,
             reads: RowReads::default(),
+            batch: Batch::default(),
         }
     }
 
@@ -113,14 +117,30 @@ impl<'a> Ctx<'a> {
     /// to `emitted`.
     pub(super) fn trace(
         &self,
+        ray: Ray,
+        first_emission: u32,
+        rng: &mut Rng,
+        emitted: &mut Vec3,
+    ) -> Option<SurfaceHit> {
+        let first = self.rt.intersect(&ray);
+        self.follow(ray, first, first_emission, rng, emitted)
+    }
+
+    /// [`Self::trace`] of `ray` whose closest hit, `first`, is already
+    /// known (from a batch of rays): the same result, the same random
+    /// numbers drawn.
+    pub(super) fn follow(
+        &self,
         mut ray: Ray,
+        first: Option<Hit>,
         first_emission: u32,
         rng: &mut Rng,
         emitted: &mut Vec3,
     ) -> Option<SurfaceHit> {
         let mut throughput = Vec3::ONE;
+        let mut hit = first;
         for bounce in 0..=MAX_SPECULAR {
-            let h = self.rt.intersect(&ray)?;
+            let h = hit?;
             let material = self.scene.materials.get(h.material as usize)?;
             let dir = ray.dir.normalize();
             let wo = -dir;
@@ -164,6 +184,10 @@ impl<'a> Ctx<'a> {
             }
             let side = h.facing(-out);
             ray = Ray::new(position + side * self.eps, out);
+            if bounce == MAX_SPECULAR {
+                break;
+            }
+            hit = self.rt.intersect(&ray);
         }
         None
     }
@@ -172,7 +196,7 @@ impl<'a> Ctx<'a> {
         self.estimate_with(map, self.lookup, s, sc)
     }
 
-    fn estimate_with(
+    pub(super) fn estimate_with(
         &self,
         map: &PhotonMap,
         lookup: Lookup,
@@ -205,7 +229,7 @@ impl<'a> Ctx<'a> {
     /// directional albedo towards the gather ray: biased there, but without
     /// the fireflies of a glossy k-nearest estimate), else, on a cache miss
     /// or without a cache, the full map's estimate.
-    fn cached_radiance(
+    pub(super) fn cached_radiance(
         &self,
         maps: &RenderMaps,
         y: &SurfaceHit,

@@ -90,6 +90,7 @@ pub mod cache;
 mod camera;
 pub mod direct;
 pub mod estimate;
+mod batch;
 mod film;
 pub mod image;
 pub(crate) mod importance_walk;

@@ -379,6 +379,31 @@ impl PixelEstimator for PhotonEstimator<'_> {
         self.ctx.radiance(ray, (sampler, sample.s), rng, sc)
     }
 
+    fn radiance_batch(
+        &self,
+        rays: &CameraRays,
+        sampler: &PixelSampler,
+        samples: &[Sample],
+        rngs: &mut [Rng],
+        sc: &mut SampleScratch,
+        out: &mut [Vec3],
+    ) {
+        if !self.ctx.batches() {
+            for ((&sample, rng), l) in samples.iter().zip(rngs).zip(out) {
+                *l = self.radiance(rays, sampler, sample, rng, sc);
+            }
+            return;
+        }
+        // The batch's buffers live in the row's scratch, out of it meanwhile.
+        let mut batch = std::mem::take(&mut sc.batch);
+        batch.start(samples.iter().map(|&sample| {
+            let jitter = sampler.get_2d(dim::PIXEL, sample.s, self.ctx.spp);
+            (sample.s, film::camera_ray(rays, sample, jitter))
+        }));
+        self.ctx.radiance_batch(sampler, rngs, sc, &mut batch, out);
+        sc.batch = batch;
+    }
+
     fn row_done(&self, sc: SampleScratch) {
         self.lookup_ns.fetch_add(sc.lookup_ns, Ordering::Relaxed);
         self.hits.fetch_add(sc.hits, Ordering::Relaxed);

@@ -1,0 +1,178 @@
+//! The photon render's samples of a pixel in batches: their camera rays,
+//! shadow rays and final-gather rays each go to the ray caster as one batch
+//! (Embree's packets: 1.3–1.5x the single-ray rate on incoherent rays,
+//! `adaptive-pm bench rays`), where [`Ctx::radiance`] casts them one by
+//! one. Every sample draws the same random numbers in the same order and
+//! adds the same terms in the same order as there, so the image is bitwise
+//! the same. Paths through mirrors and glass go on with single rays after
+//! their batched first hit ([`Ctx::follow`]).
+
+use super::integrator::{Ctx, SampleScratch, SurfaceHit};
+use super::sampler::{dim, PixelSampler};
+use super::View;
+use crate::raycast::{Hit, Ray};
+use crate::rng::Rng;
+use glam::Vec3;
+
+/// A batch's buffers, kept by a row between batches.
+#[derive(Default)]
+pub(super) struct Batch {
+    /// Each sample's index among the pixel's samples.
+    samples: Vec<u32>,
+    /// Each sample's camera ray.
+    camera: Vec<Ray>,
+    /// Each sample's first non-specular hit (`None`: the sample is done).
+    surfaces: Vec<Option<SurfaceHit>>,
+    /// The rays of one batched step, their hits and shadow tests.
+    rays: Vec<Ray>,
+    hits: Vec<Option<Hit>>,
+    blocked: Vec<bool>,
+    /// Per ray of the step: its sample and its weight (a gather ray's) or
+    /// contribution (a light sample's).
+    owners: Vec<(usize, Vec3)>,
+    direct: Vec<Vec3>,
+    indirect: Vec<Vec3>,
+}
+
+impl Batch {
+    /// Starts a batch of `(sample index, camera ray)`.
+    pub(super) fn start(&mut self, samples: impl Iterator<Item = (u32, Ray)>) {
+        self.samples.clear();
+        self.camera.clear();
+        for (s, ray) in samples {
+            self.samples.push(s);
+            self.camera.push(ray);
+        }
+    }
+
+    /// Casts `self.rays` as one batch into `self.hits`.
+    fn intersect(&mut self, ctx: &Ctx<'_>) {
+        self.hits.clear();
+        self.hits.resize(self.rays.len(), None);
+        ctx.rt.intersect_batch(&self.rays, &mut self.hits);
+    }
+}
+
+impl Ctx<'_> {
+    /// Whether [`Self::radiance_batch`] serves this render: the full view
+    /// with a final gather (the default). Other views take one sample at a
+    /// time.
+    pub(super) fn batches(&self) -> bool {
+        self.view == View::Full && self.maps.is_some() && self.gather > 0
+    }
+
+    /// [`Self::radiance`] of every sample of `batch` (begun with
+    /// [`Batch::start`]) of the pixel `px`, sample `k` drawing from
+    /// `rngs[k]`, into `out[k]`. Only when [`Self::batches`].
+    pub(super) fn radiance_batch(
+        &self,
+        px: &PixelSampler,
+        rngs: &mut [Rng],
+        sc: &mut SampleScratch,
+        b: &mut Batch,
+        out: &mut [Vec3],
+    ) {
+        let Some(maps) = self.maps else {
+            return;
+        };
+        let first_emission = if self.show_emitters { 0 } else { u32::MAX };
+        // First hits: the camera rays in one batch.
+        std::mem::swap(&mut b.rays, &mut b.camera);
+        b.intersect(self);
+        b.surfaces.clear();
+        for (k, rng) in rngs.iter_mut().enumerate() {
+            let mut seen = Vec3::ZERO;
+            let s = self.follow(b.rays[k], b.hits[k], first_emission, rng, &mut seen);
+            out[k] = seen;
+            b.surfaces.push(s);
+        }
+        std::mem::swap(&mut b.rays, &mut b.camera);
+        self.gather_batch(maps, px, rngs, sc, b);
+        self.direct_batch(px, b);
+        for (k, s) in b.surfaces.iter().enumerate() {
+            if let Some(s) = s {
+                let caustic = self.estimate_with(&maps.caustic, self.caustic_lookup, s, sc);
+                let local = b.direct[k] + caustic + b.indirect[k];
+                out[k] += s.throughput * local;
+            }
+        }
+    }
+
+    /// The final gather of every sample with a surface, into `b.indirect`:
+    /// [`Ctx::gather`]'s rays in one batch.
+    fn gather_batch(
+        &self,
+        maps: &super::RenderMaps,
+        px: &PixelSampler,
+        rngs: &mut [Rng],
+        sc: &mut SampleScratch,
+        b: &mut Batch,
+    ) {
+        let n = self.spp * self.gather;
+        b.rays.clear();
+        b.owners.clear();
+        for (k, s) in b.surfaces.iter().enumerate() {
+            let Some(s) = s else { continue };
+            for j in 0..self.gather {
+                let u = px.get_2d(dim::GATHER, b.samples[k] * self.gather + j, n);
+                if let Some((weight, ray)) = self.gather_ray(s, u) {
+                    b.rays.push(ray);
+                    b.owners.push((k, weight));
+                }
+            }
+        }
+        b.intersect(self);
+        b.indirect.clear();
+        b.indirect.resize(b.surfaces.len(), Vec3::ZERO);
+        for (i, &(k, weight)) in b.owners.iter().enumerate() {
+            // Emission straight from a light was counted by light sampling,
+            // and through mirrors and glass by the caustic map.
+            let mut emitted = Vec3::ZERO;
+            let rng = &mut rngs[k];
+            if let Some(y) = self.follow(b.rays[i], b.hits[i], u32::MAX, rng, &mut emitted) {
+                b.indirect[k] += weight * y.throughput * self.cached_radiance(maps, &y, rng, sc);
+            }
+        }
+        for v in &mut b.indirect {
+            *v /= self.gather as f32;
+        }
+    }
+
+    /// The direct light of every sample with a surface, into `b.direct`:
+    /// [`Ctx::direct`]'s shadow rays in one batch.
+    fn direct_batch(&self, px: &PixelSampler, b: &mut Batch) {
+        let l = self.light_samples;
+        b.rays.clear();
+        b.owners.clear();
+        for (k, s) in b.surfaces.iter().enumerate() {
+            let Some(s) = s else { continue };
+            for j in 0..l {
+                let (i, n) = (b.samples[k] * l + j, self.spp * l);
+                let arrival = self.lights.unshadowed_with(
+                    &s.brdf,
+                    [s.position, s.normal, s.shading, s.wo],
+                    self.eps,
+                    px.get_2d(dim::LIGHT, i, n),
+                    || px.get_2d(dim::LIGHT_POINT, i, n),
+                );
+                if let Some((ray, light)) = arrival {
+                    b.rays.push(ray);
+                    b.owners.push((k, light));
+                }
+            }
+        }
+        b.blocked.clear();
+        b.blocked.resize(b.rays.len(), false);
+        self.rt.occluded_batch(&b.rays, &mut b.blocked);
+        b.direct.clear();
+        b.direct.resize(b.surfaces.len(), Vec3::ZERO);
+        for (&(k, light), &blocked) in b.owners.iter().zip(&b.blocked) {
+            if !blocked {
+                b.direct[k] += light;
+            }
+        }
+        for v in &mut b.direct {
+            *v /= l as f32;
+        }
+    }
+}
