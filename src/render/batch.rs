@@ -176,3 +176,104 @@ impl Ctx<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::embree::Device;
+    use crate::engine::{Budget, Mode, TraceConfig, Tracer};
+    use crate::render::cache::{CacheConfig, IrradianceCache};
+    use crate::render::direct::LightSampler;
+    use crate::render::estimate::Lookup;
+    use crate::render::{default_max_radius, ray_epsilon, RenderMaps};
+    use crate::rng::hash2;
+    use crate::scene::Scene;
+
+    /// Through glass and a mirror, with the emitters seen or not and two
+    /// light samples, a batch of samples gives each sample's radiance to
+    /// the bit, as one [`Ctx::radiance`] per sample does (with the cache
+    /// and without, when the gather reads the k nearest photons).
+    #[test]
+    fn a_batch_gives_each_samples_radiance_to_the_bit() {
+        let scene = Scene::open("cornell-glass").unwrap();
+        let tracer = Tracer::new(scene.clone().commit(&Device::new().unwrap()).unwrap());
+        let prepared = tracer.prepared();
+        let mut tc = TraceConfig::new(Mode::Adaptive, Budget::NMax(20_000));
+        tc.seed = 3;
+        let maps = RenderMaps::build(&tracer.trace(&tc).unwrap().records());
+        let lookup = Lookup {
+            k: 50,
+            max_radius: default_max_radius(&scene),
+        };
+        let cache =
+            IrradianceCache::build(&maps.full, prepared, &CacheConfig { stride: 8, lookup })
+                .unwrap();
+        let rt: &dyn crate::raycast::RayCaster = prepared.caster();
+        let (lo, hi) = scene.bounds();
+        let (spp, width) = (20u32, 12u32);
+        for (show_emitters, with_cache) in [(false, true), (true, true), (true, false)] {
+            let ctx = Ctx {
+                scene: &scene,
+                rt,
+                maps: Some(&maps),
+                cache: with_cache.then_some(&cache),
+                lights: LightSampler::over(&scene, rt),
+                albedo: scene
+                    .materials()
+                    .iter()
+                    .map(|m| crate::engine::albedo::AlbedoTable::new(&m.brdf))
+                    .collect(),
+                view: View::Full,
+                gather: 2,
+                light_samples: 2,
+                spp,
+                lookup,
+                caustic_lookup: lookup,
+                eps: ray_epsilon(&scene),
+                show_emitters,
+                reads: None,
+            };
+            assert!(ctx.batches());
+            let mut sc = SampleScratch::new(lookup.k);
+            let mut batch = Batch::default();
+            let mut lit = 0;
+            // Rays from the box's open front towards points spread over it.
+            let eye = Vec3::new(
+                0.5 * (lo.x + hi.x),
+                0.5 * (lo.y + hi.y),
+                lo.z - (hi.z - lo.z),
+            );
+            for pixel in 0..width * width {
+                let px = PixelSampler::new(hash2(5, u64::from(pixel)));
+                let target = lo
+                    + (hi - lo)
+                        * Vec3::new(
+                            ((pixel % width) as f32 + 0.5) / width as f32,
+                            ((pixel / width) as f32 + 0.5) / width as f32,
+                            1.0,
+                        );
+                let ray = |s: u32| {
+                    let [jx, jy] = px.get_2d(dim::PIXEL, s, spp);
+                    Ray::new(eye, target + Vec3::new(jx, jy, 0.0) * 20.0 - eye)
+                };
+                let stream = |s: u32| Rng::new(hash2(u64::from(pixel), u64::from(s)));
+                let one_by_one: Vec<Vec3> = (0..spp)
+                    .map(|s| ctx.radiance(ray(s), (&px, s), &mut stream(s), &mut sc))
+                    .collect();
+                let mut rngs: Vec<Rng> = (0..spp).map(stream).collect();
+                let mut out = vec![Vec3::ZERO; spp as usize];
+                batch.start((0..spp).map(|s| (s, ray(s))));
+                ctx.radiance_batch(&px, &mut rngs, &mut sc, &mut batch, &mut out);
+                for (a, b) in one_by_one.iter().zip(&out) {
+                    assert_eq!(
+                        a.to_array().map(f32::to_bits),
+                        b.to_array().map(f32::to_bits)
+                    );
+                }
+                lit += out.iter().filter(|l| l.max_element() > 0.0).count();
+            }
+            // Nearly every sample sees light: the comparison is not of zeros.
+            assert!(lit * 10 > 9 * (spp * width * width) as usize, "{lit} lit");
+        }
+    }
+}

@@ -86,11 +86,11 @@
 //! its time in the k-nearest photon lookup (k = 100..200, tens of
 //! microseconds) next to ~0.1 µs per ray: batching the rays would not show.
 
+mod batch;
 pub mod cache;
 mod camera;
 pub mod direct;
 pub mod estimate;
-mod batch;
 mod film;
 pub mod image;
 pub(crate) mod importance_walk;
