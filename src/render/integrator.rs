@@ -129,6 +129,7 @@ impl<'a> Ctx<'a> {
     /// [`Self::trace`] of `ray` whose closest hit, `first`, is already
     /// known (from a batch of rays): the same result, the same random
     /// numbers drawn.
+    #[inline(always)]
     pub(super) fn follow(
         &self,
         mut ray: Ray,
