@@ -62,8 +62,13 @@ fn difference_and_se(blocks: &[(f64, f64)]) -> (f64, f64) {
 }
 
 /// On the Cornell floor (points kept 10 % away from the walls, none under the
-/// blocks), the cache's irradiance equals the k-nearest estimate at the query
-/// point within the noise of the two. A cell (side `h = 1.0 r`) holds an
+/// blocks, and none whose lookups reach a block's foot), the cache's
+/// irradiance equals the k-nearest estimate at the query point within the
+/// noise of the two. (Near a foot the cache divides by the part of its
+/// kernel on the floor and the k-nearest estimate by the whole disc, so the
+/// two differ there by design: +1.1 % on the mean when those points were
+/// in; `cache_is_unbiased_beside_the_walls` checks the cache there against
+/// the exact value.) A cell (side `h = 1.0 r`) holds an
 /// estimate at one of its samples, from the 7/8 of the photons that are not
 /// samples; a jittered lookup reads a cell at most `2 h` away.
 ///
@@ -130,6 +135,17 @@ fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
             (shadowed - open).abs().max_element() <= 1e-6 * open.max_element()
         })
     };
+    // Nothing stands within `reach` of `x` on the floor: 16 rays along it.
+    let clear_of_edges = |x: Vec3, reach: f32| {
+        (0..16).all(|i| {
+            let a = i as f32 * std::f32::consts::PI / 8.0;
+            let along = adaptive_pm::embree::Ray {
+                tfar: reach,
+                ..adaptive_pm::embree::Ray::new(x + Vec3::Y, Vec3::new(a.cos(), 0.0, a.sin()))
+            };
+            prepared.caster().intersect(&along).is_none()
+        })
+    };
     for p in &pts {
         // Points inside a block (the floor under it) are never seen: their
         // upward ray meets the block's top, not the ceiling.
@@ -139,6 +155,9 @@ fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
         }
         let e = irradiance_estimate(&maps.full, p.position, p.normal, lookup, &mut scratch);
         let e2 = irradiance_estimate(&other.full, p.position, p.normal, lookup, &mut scratch);
+        if !clear_of_edges(p.position, 1.5 * e.radius + 2.5 * cache.cell_size()) {
+            continue;
+        }
         let jitters = 4;
         let c = (0..jitters)
             .map(|_| {
