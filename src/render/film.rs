@@ -2,7 +2,8 @@
 //! `ImageTileIntegrator::Render` is): the rows of a tile in parallel, each
 //! pixel's key, its samples' random streams, their f64 sum, and the samples
 //! dropped as NaN or infinite. An estimator supplies only the radiance of
-//! one sample ([`PixelEstimator`]).
+//! one sample ([`PixelEstimator`]), or of a pixel's samples
+//! [`SAMPLES_PER_BATCH`] at a time, when it casts their rays in batches.
 //!
 //! Pixel `p` (its whole-image index, also inside a tile) has the key
 //! `hash2(seed, p)`; its sample `s` draws from `Rng::new(hash2(key, s))`. So an
