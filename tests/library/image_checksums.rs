@@ -134,7 +134,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Sse2,
         "cornell",
         [
-            0x1723_55f3_83a6_5978,
+            0xdabd_3550_0978_52a8,
             0xd392_ae5f_cf25_5832,
             0xd1e8_9d4b_527f_ce9e,
             0x21a7_3131_5da6_2d84,
@@ -146,7 +146,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Sse2,
         "cornell-glass",
         [
-            0x921a_2750_21bd_0dd2,
+            0x37df_8e94_44bd_ab22,
             0xe19d_978e_0c1b_28f6,
             0xd178_adc3_505a_1a63,
             0x4422_8fbf_cd9a_27b2,
@@ -158,7 +158,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx2,
         "cornell",
         [
-            0xe8ba_c34d_bdd0_d2a9,
+            0x5c5b_084e_7e6a_7644,
             0x43f7_f470_ef9e_c433,
             0x8bf2_5aa2_f039_5905,
             0xddd1_6012_a5f9_002e,
@@ -170,7 +170,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx2,
         "cornell-glass",
         [
-            0xa546_7d45_dfb8_909c,
+            0x04f5_8208_ea48_ecc4,
             0x9cfc_00b6_6ff6_7aef,
             0x1ebf_4aeb_3fdd_6fee,
             0xefdb_fecd_2b67_4307,
@@ -182,7 +182,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx512,
         "cornell",
         [
-            0xce94_198c_6840_a748,
+            0x7072_2559_0734_5605,
             0xfef1_c0e4_f37c_ce91,
             0x0605_42eb_3124_8c84,
             0xb30d_e337_1801_ec7b,
@@ -194,7 +194,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx512,
         "cornell-glass",
         [
-            0xc227_f148_d33e_de32,
+            0xe10d_de11_6d78_8135,
             0x133e_be17_baba_c39b,
             0xbf96_9617_d9e1_7b6d,
             0x9f14_6f8a_e7f9_9e7a,
