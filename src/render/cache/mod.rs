@@ -18,10 +18,11 @@
 //!   Jensen's cone filter, counting only photons that arrived on the sample's
 //!   side *and* lie in its tangent plane (within [`PLANE_TOLERANCE`] of the
 //!   scene's diagonal), so a wall's photons do not leak onto the floor.
-//!   Divided by the **part of the kernel's disc that lies on the surface**
-//!   (`support`: 16 rays along the plane and 16 down through it, more at an
-//!   edge), not the whole disc: no photon lands past a floor's edge or
-//!   behind a wall, and an estimate that counted that part read low by it.
+//!   Divided by the **part of the kernel's disc that lies on a surface**
+//!   within that tolerance (`support`: 16 rays down through the plane at the
+//!   disc's rim, bisected towards an edge), not the whole disc: no photon
+//!   the estimate admits lies past a floor's end or a block's top edge, and
+//!   an estimate that counted that part read low by it.
 //! - **Cells**: cubes of side `h = r sqrt(4 pi stride / k)` ([`SAMPLES_PER_CELL`]
 //!   = 4 samples where the density is the median one; `h = 1.0 r` at the
 //!   defaults, `r` the median k-nearest radius of 1024 spread samples), split
