@@ -334,8 +334,8 @@ pub(crate) fn assert_photon_and_path_agree(scene: Scene, runs: u64) {
 /// kernel's blur darkening corners and edges, the cache's cells) all shrink
 /// with the kernel radius `r ~ sqrt(k / N)`. Measured at 32^2 before the
 /// cache divided by the kernel's share of the surface: -3.3 %, -1.2 %,
-/// -0.2 % (-3.7 %, -0.9 %, -0.15 % over three seeds here); since, +0.8 %,
-/// +0.2 %, +0.2 % (+- 0.3, 0.25, 0.13 %): at least `sqrt(10)` per decade
+/// -0.2 % (-3.7 %, -0.9 %, -0.15 % over three seeds here); since, +0.4 %,
+/// +0.1 %, +0.15 % (+- 0.3, 0.26, 0.14 %): at least `sqrt(10)` per decade
 /// while it is above the noise. Claim:
 /// each decade divides the bias by `sqrt(10)` or more, so 1e6 is within
 /// ~0.3 % (a bias that stalls, as the cache's once did at +0.5 %, fails when
