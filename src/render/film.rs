@@ -68,13 +68,28 @@ pub(super) trait PixelEstimator: Sync {
         row: &mut Self::Row,
         out: &mut [Vec3],
     ) {
-        for ((&sample, rng), l) in samples.iter().zip(rngs).zip(out) {
-            *l = self.radiance(rays, pixel, sample, rng, row);
-        }
+        one_by_one(self, rays, pixel, samples, rngs, row, out);
     }
 
     /// A row is finished; its counters are final.
     fn row_done(&self, row: Self::Row);
+}
+
+/// [`PixelEstimator::radiance_batch`] as one [`PixelEstimator::radiance`]
+/// per sample: the default, and the fallback of an estimator that batches
+/// only some renders.
+pub(super) fn one_by_one<E: PixelEstimator + ?Sized>(
+    estimator: &E,
+    rays: &CameraRays,
+    pixel: &E::Pixel,
+    samples: &[Sample],
+    rngs: &mut [Rng],
+    row: &mut E::Row,
+    out: &mut [Vec3],
+) {
+    for ((&sample, rng), l) in samples.iter().zip(rngs).zip(out) {
+        *l = estimator.radiance(rays, pixel, sample, rng, row);
+    }
 }
 
 /// Samples of a pixel handed to [`PixelEstimator::radiance_batch`] at a

@@ -18,7 +18,7 @@ use super::{
 };
 use crate::engine::albedo::AlbedoTable;
 use crate::error::{Error, Result};
-use crate::raycast::{CheckedCaster, RayCaster};
+use crate::raycast::{CheckedCaster, Ray, RayCaster};
 use crate::rng::Rng;
 use crate::scene::{PreparedScene, Scene};
 use glam::Vec3;
@@ -354,6 +354,14 @@ struct PhotonEstimator<'a> {
     misses: AtomicU64,
 }
 
+impl PhotonEstimator<'_> {
+    /// The camera ray of `sample`, jittered by the pixel's stratified point.
+    fn camera_ray(&self, rays: &CameraRays, sampler: &PixelSampler, sample: Sample) -> Ray {
+        let jitter = sampler.get_2d(dim::PIXEL, sample.s, self.ctx.spp);
+        film::camera_ray(rays, sample, jitter)
+    }
+}
+
 impl PixelEstimator for PhotonEstimator<'_> {
     type Row = SampleScratch;
     type Pixel = PixelSampler;
@@ -374,8 +382,7 @@ impl PixelEstimator for PhotonEstimator<'_> {
         rng: &mut Rng,
         sc: &mut SampleScratch,
     ) -> Vec3 {
-        let jitter = sampler.get_2d(dim::PIXEL, sample.s, self.ctx.spp);
-        let ray = film::camera_ray(rays, sample, jitter);
+        let ray = self.camera_ray(rays, sampler, sample);
         self.ctx.radiance(ray, (sampler, sample.s), rng, sc)
     }
 
@@ -389,17 +396,16 @@ impl PixelEstimator for PhotonEstimator<'_> {
         out: &mut [Vec3],
     ) {
         if !self.ctx.batches() {
-            for ((&sample, rng), l) in samples.iter().zip(rngs).zip(out) {
-                *l = self.radiance(rays, sampler, sample, rng, sc);
-            }
+            film::one_by_one(self, rays, sampler, samples, rngs, sc, out);
             return;
         }
         // The batch's buffers live in the row's scratch, out of it meanwhile.
         let mut batch = std::mem::take(&mut sc.batch);
-        batch.start(samples.iter().map(|&sample| {
-            let jitter = sampler.get_2d(dim::PIXEL, sample.s, self.ctx.spp);
-            (sample.s, film::camera_ray(rays, sample, jitter))
-        }));
+        batch.start(
+            samples
+                .iter()
+                .map(|&sample| (sample.s, self.camera_ray(rays, sampler, sample))),
+        );
         self.ctx.radiance_batch(sampler, rngs, sc, &mut batch, out);
         sc.batch = batch;
     }

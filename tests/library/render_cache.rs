@@ -2,7 +2,7 @@
 //! render's new JSON keys, and clear errors for bad values of the new options.
 //! Small budgets and tiny images, fixed seeds.
 
-use adaptive_pm::embree::Device;
+use adaptive_pm::embree::{Device, EmbreeScene};
 use adaptive_pm::engine::{Budget, Maps, Mode, TraceConfig, Tracer};
 use adaptive_pm::photon_map::{PhotonMap, PhotonRecord};
 use adaptive_pm::raycast::{Ray, RayCaster};
@@ -242,6 +242,31 @@ fn uniform_floor_photons(scene: &Scene, n: usize, rng: &mut Rng) -> (Vec<PhotonR
     (records, area)
 }
 
+/// The cache (k = 100, stride 8) of `n` photons spread evenly over
+/// `scene`'s floor ([`uniform_floor_photons`], drawn from the test seed
+/// `seed`), with the scene it was built in, the exact irradiance `n / area`
+/// and the random stream, for the lookups, that drew them.
+fn uniform_floor_cache(
+    scene: &Scene,
+    n: usize,
+    seed: u64,
+) -> (EmbreeScene, IrradianceCache, f64, Rng) {
+    let prepared = scene.clone().commit(&Device::new().unwrap()).unwrap();
+    let mut rng = Rng::new(crate::common::seed(seed));
+    let (records, area) = uniform_floor_photons(scene, n, &mut rng);
+    let lookup = Lookup {
+        k: 100,
+        max_radius: default_max_radius(scene),
+    };
+    let cache = IrradianceCache::build(
+        &PhotonMap::build(&records),
+        &prepared,
+        &CacheConfig { stride: 8, lookup },
+    )
+    .unwrap();
+    (prepared, cache, n as f64 / area as f64, rng)
+}
+
 /// Photons spread evenly over the empty box's floor, read by the cache next
 /// to its edges: the green, red and back walls (concave corners: no photon
 /// beyond) and the open front (the floor ends). A kernel's disc there runs
@@ -250,23 +275,13 @@ fn uniform_floor_photons(scene: &Scene, n: usize, rng: &mut Rng) -> (Vec<PhotonR
 /// about -12 % at half a radius from a wall, -47 % at the wall. Points at
 /// 0.05, 0.5, 1 and 2 cell sides (`h ~ r`) from each edge, 100 along each
 /// (away from the corners), 4 jittered lookups each (under 5 % of which
-/// may miss); `sum cache / sum exact - 1` must be 0 within 4 sigma, sigma from batch means over blocks of 50
-/// units (~7 kernel radii) along the edges.
+/// may miss); `sum cache / sum exact - 1` must be 0 within 4 sigma, sigma
+/// from batch means over blocks of 50 units (~7 kernel radii) along the
+/// edges.
 #[test]
 fn cache_is_unbiased_beside_the_walls() {
     let scene = Scene::open("cornell-empty").unwrap();
-    let prepared = Arc::new(scene.clone().commit(&Device::new().unwrap()).unwrap());
-    let n = 200_000;
-    let mut rng = Rng::new(crate::common::seed(11));
-    let (records, area) = uniform_floor_photons(&scene, n, &mut rng);
-    let map = PhotonMap::build(&records);
-    let lookup = Lookup {
-        k: 100,
-        max_radius: default_max_radius(&scene),
-    };
-    let cache =
-        IrradianceCache::build(&map, &prepared, &CacheConfig { stride: 8, lookup }).unwrap();
-    let exact = n as f64 / area as f64;
+    let (_, cache, exact, mut rng) = uniform_floor_cache(&scene, 200_000, 11);
     let h = cache.cell_size();
     // The floor: x from 0 (green wall) to 552.8 - 3.2 z / 559.2 (red wall),
     // z from 0 (open) to 559.2 (back wall).
@@ -327,20 +342,8 @@ fn cache_is_unbiased_beside_the_walls() {
 #[test]
 fn cache_is_unbiased_on_a_uniform_density() {
     let scene = Scene::cornell().unwrap();
-    let device = Device::new().unwrap();
-    let prepared = Arc::new(scene.clone().commit(&device).unwrap());
-    let n = 800_000;
-    let mut rng = Rng::new(crate::common::seed(7));
-    let (records, area) = uniform_floor_photons(&scene, n, &mut rng);
-    let map = PhotonMap::build(&records);
-    let lookup = Lookup {
-        k: 100,
-        max_radius: default_max_radius(&scene),
-    };
+    let (prepared, cache, exact, mut rng) = uniform_floor_cache(&scene, 800_000, 7);
     let (lo, hi) = scene.bounds();
-    let cache_cfg = CacheConfig { stride: 8, lookup };
-    let cache = IrradianceCache::build(&map, &prepared, &cache_cfg).unwrap();
-    let exact = n as f64 / area as f64;
     let side = 10.0 * 0.9 * (hi.x - lo.x) / 100.0;
     let (mut lookups, mut misses) = (Vec::new(), 0);
     for p in floor_points(&scene, "floor", 100, 100, 0.05) {

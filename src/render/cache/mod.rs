@@ -69,9 +69,9 @@
 //! by the kernel share: it scaled with `r` too, and was most of the
 //! renderer's bias. On the Cornell box at 256^2 the image's mean read
 //! -1.0 to -1.3 % at N_MAX 1e5 and -0.5 to -0.6 % at 3e5 without it,
-//! +0.3 to +0.4 % and +0.2 to +0.3 % with it (docs/rendering.md, "The
-//! kernel's share of the surface"). The k-nearest fallback of a miss (0.02 %
-//! of lookups there) still divides by the whole disc.
+//! +0.2 to +0.3 % at 1e5 with it (docs/rendering.md, "The kernel's share
+//! of the surface"). The k-nearest fallback of a miss (0.07 % of the
+//! lookups there) still divides by the whole disc.
 //!
 //! Three biases that would *not* vanish with `N` are removed by construction
 //! (each measured before its fix, on the Cornell box at k = 100):

@@ -147,6 +147,27 @@ mod tests {
         rt.intersect(&Ray::new(x + Vec3::Y * lift, dir)).unwrap().t
     }
 
+    /// The share at `x` on the floor (normal +Y) for 16 rotations: each
+    /// within `each` of `want`, their mean within `mean`.
+    fn assert_share_over_rotations(
+        rt: &dyn RayCaster,
+        x: Vec3,
+        r: f32,
+        tol: f32,
+        want: f32,
+        (each, mean): (f32, f32),
+        a: f32,
+    ) {
+        let shares: Vec<f32> = (0..16)
+            .map(|k| kernel_share(rt, x, Vec3::Y, r, tol, k as f32 / 16.0))
+            .collect();
+        for s in &shares {
+            assert!((s - want).abs() < each, "a {a}: {s} vs {want}");
+        }
+        let m = shares.iter().sum::<f32>() / 16.0;
+        assert!((m - want).abs() < mean, "a {a}: mean {m} vs {want}");
+    }
+
     #[test]
     fn a_disc_inside_the_floor_lies_on_it_whole() {
         let (prepared, tol, centre) = empty_box();
@@ -169,14 +190,7 @@ mod tests {
             let d = (a * r).max(2.0 * tol);
             let x = centre - Vec3::X * (wall - d);
             let want = share_where(|x, _| x > -(d / r) as f64) as f32;
-            let shares: Vec<f32> = (0..16)
-                .map(|k| kernel_share(rt, x, Vec3::Y, r, tol, k as f32 / 16.0))
-                .collect();
-            for s in &shares {
-                assert!((s - want).abs() < 0.04, "a {a}: {s} vs {want}");
-            }
-            let mean = shares.iter().sum::<f32>() / 16.0;
-            assert!((mean - want).abs() < 0.01, "a {a}: mean {mean} vs {want}");
+            assert_share_over_rotations(rt, x, r, tol, want, (0.04, 0.01), a);
         }
     }
 
@@ -192,14 +206,7 @@ mod tests {
         for a in [0.1f32, 0.3, 0.6] {
             let x = Vec3::new(centre.x, centre.y, a * r);
             let want = share_where(|x, _| x > -f64::from(a)) as f32;
-            let shares: Vec<f32> = (0..16)
-                .map(|k| kernel_share(rt, x, Vec3::Y, r, tol, k as f32 / 16.0))
-                .collect();
-            for s in &shares {
-                assert!((s - want).abs() < 0.05, "a {a}: {s} vs {want}");
-            }
-            let mean = shares.iter().sum::<f32>() / 16.0;
-            assert!((mean - want).abs() < 0.015, "a {a}: mean {mean} vs {want}");
+            assert_share_over_rotations(rt, x, r, tol, want, (0.05, 0.015), a);
         }
     }
 
