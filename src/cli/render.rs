@@ -12,8 +12,8 @@ use adaptive_pm::engine::{CausticBudget, CausticReport, Mode, TraceConfig, Trace
 use adaptive_pm::output::refuse_overwrite;
 use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
-    cache::DEFAULT_STRIDE, check_output_path, tile_rows, CheckedRender, Image, Integrator,
-    RenderConfig, RenderMaps, RenderStats, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
+    cache::DEFAULT_STRIDE, check_output_path, tile_rows, CheckedRender, GatherAllocation, Image,
+    Integrator, RenderConfig, RenderMaps, RenderStats, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
 };
 use adaptive_pm::scene::Scene;
 use anyhow::Context;
@@ -65,6 +65,10 @@ pub struct RenderArgs {
     /// Final-gather rays per camera sample (0: read the indirect map at the first hit).
     #[arg(long, default_value_t = DEFAULT_GATHER)]
     pub final_gather: u32,
+    /// How the gather's rays are spread: variance (that many per sample on
+    /// average, more where a pilot measured more gather noise) or uniform.
+    #[arg(long, default_value = "variance")]
+    pub gather_allocation: GatherAllocation,
     /// Light samples (shadow rays) per camera sample.
     #[arg(long, default_value_t = 1)]
     pub light_samples: u32,
@@ -247,6 +251,7 @@ fn render_config(args: &RenderArgs) -> anyhow::Result<CheckedRender> {
     let mut cfg = RenderConfig::new(args.width, args.height);
     cfg.spp = first_spp(args.spp);
     cfg.final_gather = args.final_gather;
+    cfg.gather_allocation = args.gather_allocation;
     cfg.light_samples = args.light_samples;
     cfg.cache_stride = args.cache_stride;
     cfg.k = args.k;
@@ -355,6 +360,9 @@ fn report(args: &RenderArgs, cfg: &RenderConfig, image: &Image, run: &RunReport)
                 "noise_estimate": spp.noise.map(|n| n.0),
                 "noise_target_reached": spp.noise.map(|n| n.1),
                 "final_gather": args.final_gather,
+                "gather_allocation": args.gather_allocation.name(),
+                "mean_gather": stats.mean_gather,
+                "gather_plan_s": stats.gather_plan_s,
                 "light_samples": args.light_samples,
                 "cache_stride": args.cache_stride,
                 "k": args.k,

@@ -17,6 +17,8 @@ use glam::Vec3;
 /// A batch's buffers, kept by a row between batches.
 #[derive(Default)]
 pub(super) struct Batch {
+    /// Gather rays per sample of the batch's pixel.
+    gather: u32,
     /// Each sample's index among the pixel's samples.
     samples: Vec<u32>,
     /// Each sample's camera ray.
@@ -35,8 +37,10 @@ pub(super) struct Batch {
 }
 
 impl Batch {
-    /// Starts a batch of `(sample index, camera ray)`.
-    pub(super) fn start(&mut self, samples: impl Iterator<Item = (u32, Ray)>) {
+    /// Starts a batch of `(sample index, camera ray)` of a pixel that
+    /// gathers with `gather` rays a sample.
+    pub(super) fn start(&mut self, gather: u32, samples: impl Iterator<Item = (u32, Ray)>) {
+        self.gather = gather;
         self.samples.clear();
         self.camera.clear();
         for (s, ray) in samples {
@@ -98,7 +102,8 @@ impl Ctx<'_> {
         }
     }
 
-    /// The final gather of every sample with a surface, into `b.indirect`:
+    /// The final gather of every sample with a surface, `b.gather` rays
+    /// each, into `b.indirect`:
     /// [`Ctx::gather`]'s rays in one batch.
     fn gather_batch(
         &self,
@@ -108,13 +113,14 @@ impl Ctx<'_> {
         sc: &mut SampleScratch,
         b: &mut Batch,
     ) {
-        let n = self.spp * self.gather;
+        let g = b.gather;
+        let n = self.spp * g;
         b.rays.clear();
         b.owners.clear();
         for (k, s) in b.surfaces.iter().enumerate() {
             let Some(s) = s else { continue };
-            for j in 0..self.gather {
-                let u = px.get_2d(dim::GATHER, b.samples[k] * self.gather + j, n);
+            for j in 0..g {
+                let u = px.get_2d(dim::GATHER, b.samples[k] * g + j, n);
                 if let Some((weight, ray)) = self.gather_ray(s, u) {
                     b.rays.push(ray);
                     b.owners.push((k, weight));
@@ -134,7 +140,7 @@ impl Ctx<'_> {
             }
         }
         for v in &mut b.indirect {
-            *v /= self.gather as f32;
+            *v /= g as f32;
         }
     }
 
@@ -189,8 +195,8 @@ mod tests {
     use crate::rng::hash2;
     use crate::scene::Scene;
 
-    /// Through glass and a mirror, with the emitters seen or not and two
-    /// light samples, a batch of samples gives each sample's radiance to
+    /// Through glass and a mirror, with the emitters seen or not, two light
+    /// samples and 1 to 3 gather rays a sample, a batch of samples gives each sample's radiance to
     /// the bit, as one [`Ctx::radiance`] per sample does (with the cache
     /// and without, when the gather reads the k nearest photons).
     #[test]
@@ -245,6 +251,8 @@ mod tests {
             );
             for pixel in 0..width * width {
                 let px = PixelSampler::new(hash2(5, u64::from(pixel)));
+                // Pixels gather with their own counts, as a plan makes them.
+                let g = 1 + pixel % 3;
                 let target = lo
                     + (hi - lo)
                         * Vec3::new(
@@ -258,11 +266,11 @@ mod tests {
                 };
                 let stream = |s: u32| Rng::new(hash2(u64::from(pixel), u64::from(s)));
                 let one_by_one: Vec<Vec3> = (0..spp)
-                    .map(|s| ctx.radiance(ray(s), (&px, s), &mut stream(s), &mut sc))
+                    .map(|s| ctx.radiance(ray(s), (&px, s), g, &mut stream(s), &mut sc))
                     .collect();
                 let mut rngs: Vec<Rng> = (0..spp).map(stream).collect();
                 let mut out = vec![Vec3::ZERO; spp as usize];
-                batch.start((0..spp).map(|s| (s, ray(s))));
+                batch.start(g, (0..spp).map(|s| (s, ray(s))));
                 ctx.radiance_batch(&px, &mut rngs, &mut sc, &mut batch, &mut out);
                 for (a, b) in one_by_one.iter().zip(&out) {
                     assert_eq!(

@@ -41,8 +41,9 @@ pub(super) trait PixelEstimator: Sync {
     /// Fresh scratch space for a row.
     fn row(&self) -> Self::Row;
 
-    /// The state a pixel's samples share.
-    fn pixel(&self, key: u64) -> Self::Pixel;
+    /// The state a pixel's samples share, from its key and its place
+    /// `(x, y)` in the whole image.
+    fn pixel(&self, key: u64, x: u32, y: u32) -> Self::Pixel;
 
     /// One sample of the radiance arriving at the camera through `sample`.
     fn radiance(
@@ -133,7 +134,7 @@ pub(super) fn develop<E: PixelEstimator>(
             let mut row_dropped = 0;
             for (x, px) in pixels.iter_mut().enumerate() {
                 let key = hash2(cfg.seed, y as u64 * width as u64 + x as u64);
-                let pixel = estimator.pixel(key);
+                let pixel = estimator.pixel(key, x as u32, y);
                 let mut sum = DVec3::ZERO;
                 let mut kept = 0;
                 for first in (0..cfg.spp).step_by(SAMPLES_PER_BATCH as usize) {

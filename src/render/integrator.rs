@@ -255,20 +255,21 @@ impl<'a> Ctx<'a> {
         self.estimate(&maps.full, y, sc)
     }
 
-    /// Final gather from `s`: BRDF-sampled rays (stratified over the pixel's
-    /// samples), the cache (or the full map) at their hits.
+    /// Final gather from `s`: `g` BRDF-sampled rays (stratified over the
+    /// pixel's samples), the cache (or the full map) at their hits.
     fn gather(
         &self,
         maps: &RenderMaps,
         s: &SurfaceHit,
         (px, sample): (&PixelSampler, u32),
+        g: u32,
         rng: &mut Rng,
         sc: &mut SampleScratch,
     ) -> Vec3 {
         let mut sum = Vec3::ZERO;
-        let n = self.spp * self.gather;
-        for j in 0..self.gather {
-            let u = px.get_2d(dim::GATHER, sample * self.gather + j, n);
+        let n = self.spp * g;
+        for j in 0..g {
+            let u = px.get_2d(dim::GATHER, sample * g + j, n);
             let Some((weight, ray)) = self.gather_ray(s, u) else {
                 continue;
             };
@@ -279,7 +280,7 @@ impl<'a> Ctx<'a> {
                 sum += weight * y.throughput * self.cached_radiance(maps, &y, rng, sc);
             }
         }
-        sum / self.gather as f32
+        sum / g as f32
     }
 
     /// A BRDF-sampled ray leaving `s` from the point `u` in `[0, 1)^2`, and
@@ -313,10 +314,13 @@ impl<'a> Ctx<'a> {
         sum / l as f32
     }
 
+    /// The radiance one camera sample brings along `ray`: sample `px.1` of
+    /// the pixel whose points `px.0` draws, gathering with `g` rays.
     pub(super) fn radiance(
         &self,
         ray: Ray,
         px: (&PixelSampler, u32),
+        g: u32,
         rng: &mut Rng,
         sc: &mut SampleScratch,
     ) -> Vec3 {
@@ -338,7 +342,7 @@ impl<'a> Ctx<'a> {
             }
             (View::Full, Some(m)) => {
                 let indirect = if self.gather > 0 {
-                    self.gather(m, &s, px, rng, sc)
+                    self.gather(m, &s, px, g, rng, sc)
                 } else {
                     self.estimate(&m.indirect, &s, sc)
                 };

@@ -92,6 +92,7 @@ mod camera;
 pub mod direct;
 pub mod estimate;
 mod film;
+mod gather_plan;
 pub mod image;
 pub(crate) mod importance_walk;
 mod integrator;
@@ -109,6 +110,7 @@ pub use cache::{CacheConfig, IrradianceCache};
 pub use camera::CameraRays;
 pub use direct::LightSampler;
 pub use estimate::{irradiance_estimate, radiance_estimate, Estimate, Lookup};
+pub use gather_plan::{GatherAllocation, GatherPlan};
 #[cfg(feature = "image-io")]
 #[cfg_attr(docsrs, doc(cfg(feature = "image-io")))]
 pub use image::ExrFile;
@@ -229,8 +231,11 @@ pub struct RenderConfig {
     pub height: u32,
     /// Samples per pixel (jittered positions; one light sample each).
     pub spp: u32,
-    /// Final-gather rays per camera sample (0 = read the indirect map at the first hit).
+    /// Final-gather rays per camera sample (0 = read the indirect map at the
+    /// first hit): in every pixel, or on average ([`RenderConfig::gather_allocation`]).
     pub final_gather: u32,
+    /// How the gather's rays are spread over the pixels.
+    pub gather_allocation: GatherAllocation,
     /// Light samples (shadow rays) per camera sample.
     pub light_samples: u32,
     /// The irradiance cache the gather reads: one entry per `cache_stride`
@@ -272,6 +277,7 @@ impl RenderConfig {
             height,
             spp: 1,
             final_gather: DEFAULT_GATHER,
+            gather_allocation: GatherAllocation::default(),
             light_samples: 1,
             cache_stride: cache::DEFAULT_STRIDE,
             k: DEFAULT_K,

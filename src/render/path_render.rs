@@ -98,7 +98,7 @@ impl PixelEstimator for PathEstimator<'_> {
 
     fn row(&self) {}
 
-    fn pixel(&self, _key: u64) {}
+    fn pixel(&self, _key: u64, _x: u32, _y: u32) {}
 
     fn radiance(
         &self,

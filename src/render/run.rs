@@ -7,6 +7,7 @@ use super::camera::CameraRays;
 use super::direct::LightSampler;
 use super::estimate::Lookup;
 use super::film::{self, PixelEstimator, Sample};
+use super::gather_plan::{self, GatherPlan};
 use super::integrator::{Ctx, SampleScratch};
 use super::path_render::light_pixels;
 use super::progressive::{render_to_noise, NoiseTarget, Progressive, Round};
@@ -47,6 +48,11 @@ pub struct RenderStats {
     /// out of their pixel's mean. Not 0: the image is biased there; the
     /// command line warns.
     pub dropped_samples: u64,
+    /// Seconds of the gather plan's pilot (0 without a plan:
+    /// [`GatherAllocation`](super::GatherAllocation)).
+    pub gather_plan_s: f64,
+    /// Mean final-gather rays per camera sample over the image's pixels.
+    pub mean_gather: f64,
 }
 
 /// Renders the scene of `prepared` with `maps`, on the current rayon pool,
@@ -96,7 +102,7 @@ pub fn render_checked<C: RayCaster>(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(Image, RenderStats)> {
     let (scene, rt) = (prepared.scene(), prepared.caster());
-    render_photons(scene, rt, maps, cache, cfg, progress, None)
+    render_photons(scene, rt, (maps, cache, None), cfg, progress, None)
 }
 
 /// [`render_with`] (without a cache given: it builds its own when the
@@ -116,8 +122,7 @@ pub fn render_reading<C: RayCaster>(
     render_photons(
         scene,
         rt,
-        maps,
-        None,
+        (maps, None, None),
         &cfg.check()?,
         &|_, _| {},
         Some(reads),
@@ -175,15 +180,21 @@ pub fn render_progressive<C: RayCaster>(
     let (scene, rt) = (prepared.scene(), prepared.caster());
     check_maps(cfg, maps)?;
     let cache = cache_for(scene, rt, maps, cfg, None)?;
+    // One plan for every round: its pilot is the settings', not a half's.
+    let plan = gather_plan_for(scene, rt, maps, cache.as_ref(), cfg)?;
     let mut stats = RenderStats::default();
     let mut half = |c: &CheckedRender| {
-        let (image, s) = render_photons(scene, rt, maps, cache.as_ref(), c, progress, None)?;
+        let sources = (maps, cache.as_ref(), plan.as_ref());
+        let (image, s) = render_photons(scene, rt, sources, c, progress, None)?;
         stats.add(&s);
         Ok(image)
     };
     let p = render_halves_to_noise(prepared, cfg, target, &mut half, on_round)?;
     if let Some(c) = &cache {
         stats.cache_build_s = c.build_s;
+    }
+    if let Some(p) = &plan {
+        stats.gather_plan_s = p.seconds;
     }
     Ok((p, stats))
 }
@@ -255,13 +266,21 @@ fn check_maps(cfg: &RenderConfig, maps: Option<&RenderMaps>) -> Result<()> {
     Ok(())
 }
 
+/// What a render reads besides its settings: the maps, an irradiance cache
+/// built already, a gather plan made already (each built here when the
+/// settings ask for it and none is given).
+type Sources<'a> = (
+    Option<&'a RenderMaps>,
+    Option<&'a IrradianceCache>,
+    Option<&'a GatherPlan>,
+);
+
 // One body for every caster (behind `dyn`: a virtual call is nothing next
 // to a ray and a photon lookup), so the renderer is compiled once.
 fn render_photons(
     scene: &Scene,
     rt: &dyn RayCaster,
-    maps: Option<&RenderMaps>,
-    cache: Option<&IrradianceCache>,
+    (maps, cache, plan): Sources<'_>,
     cfg: &CheckedRender,
     progress: &(dyn Fn(u64, u64) + Sync),
     reads: Option<&MapReads>,
@@ -269,15 +288,53 @@ fn render_photons(
     check_maps(cfg, maps)?;
     let checked = CheckedCaster::new(scene, rt);
     let rt: &dyn RayCaster = &checked;
-    let lookup = lookup_of(scene, cfg);
-    let max_radius = lookup.max_radius;
     let built = match cache {
         None => cache_for(scene, rt, maps, cfg, reads)?,
         Some(_) => None,
     };
     let cache = cache.or(built.as_ref());
     let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
-    let ctx = Ctx {
+    let ctx = context(scene, rt, (maps, cache), cfg, reads);
+    let planned = match (plan, maps) {
+        (None, Some(m)) => gather_plan::plan(&ctx, m, &rays, cfg),
+        _ => None,
+    };
+    let plan = plan.or(planned.as_ref());
+    let estimator = PhotonEstimator {
+        ctx,
+        k: cfg.k,
+        plan,
+        lookup_ns: AtomicU64::new(0),
+        hits: AtomicU64::new(0),
+        misses: AtomicU64::new(0),
+    };
+    let (image, dropped) = film::develop(cfg, &rays, &estimator, progress)?;
+    checked.result()?;
+    let stats = RenderStats {
+        samples: u64::from(image.width) * u64::from(image.height) * u64::from(cfg.spp),
+        lookup_s: estimator.lookup_ns.into_inner() as f64 * 1e-9,
+        cache_hits: estimator.hits.into_inner(),
+        cache_misses: estimator.misses.into_inner(),
+        cache_build_s: built.as_ref().map_or(0.0, |c| c.build_s),
+        cache_entries: cache.map_or(0, |c| c.len()),
+        cache_bytes_per_entry: cache.map_or(0, |c| c.bytes_per_entry()),
+        dropped_samples: dropped,
+        gather_plan_s: planned.as_ref().map_or(0.0, |p| p.seconds),
+        mean_gather: plan.map_or(f64::from(estimator.ctx.gather), GatherPlan::mean),
+    };
+    Ok((image, stats))
+}
+
+/// The per-sample estimator of `cfg` over `rt`, reading `maps` and `cache`.
+fn context<'a>(
+    scene: &'a Scene,
+    rt: &'a dyn RayCaster,
+    (maps, cache): (Option<&'a RenderMaps>, Option<&'a IrradianceCache>),
+    cfg: &CheckedRender,
+    reads: Option<&'a MapReads<'a>>,
+) -> Ctx<'a> {
+    let lookup = lookup_of(scene, cfg);
+    Ctx {
         scene,
         rt,
         maps,
@@ -300,32 +357,30 @@ fn render_photons(
             k: cfg.caustic_k,
             max_radius: cfg
                 .caustic_max_radius
-                .unwrap_or(max_radius * CAUSTIC_RADIUS_FRACTION),
+                .unwrap_or(lookup.max_radius * CAUSTIC_RADIUS_FRACTION),
         },
         eps: ray_epsilon(scene),
         show_emitters: cfg.show_emitters,
         reads,
-    };
-    let estimator = PhotonEstimator {
-        ctx,
-        k: cfg.k,
-        lookup_ns: AtomicU64::new(0),
-        hits: AtomicU64::new(0),
-        misses: AtomicU64::new(0),
-    };
-    let (image, dropped) = film::develop(cfg, &rays, &estimator, progress)?;
+    }
+}
+
+/// The gather plan `cfg` asks for ([`gather_plan`]), reading `maps` and
+/// `cache`; `None` when it asks for none.
+fn gather_plan_for(
+    scene: &Scene,
+    rt: &dyn RayCaster,
+    maps: Option<&RenderMaps>,
+    cache: Option<&IrradianceCache>,
+    cfg: &CheckedRender,
+) -> Result<Option<GatherPlan>> {
+    let Some(m) = maps else { return Ok(None) };
+    let checked = CheckedCaster::new(scene, rt);
+    let ctx = context(scene, &checked, (maps, cache), cfg, None);
+    let rays = CameraRays::new(&cfg.camera_for(scene)?, cfg.width, cfg.height);
+    let plan = gather_plan::plan(&ctx, m, &rays, cfg);
     checked.result()?;
-    let stats = RenderStats {
-        samples: u64::from(image.width) * u64::from(image.height) * u64::from(cfg.spp),
-        lookup_s: estimator.lookup_ns.into_inner() as f64 * 1e-9,
-        cache_hits: estimator.hits.into_inner(),
-        cache_misses: estimator.misses.into_inner(),
-        cache_build_s: built.as_ref().map_or(0.0, |c| c.build_s),
-        cache_entries: cache.map_or(0, |c| c.len()),
-        cache_bytes_per_entry: cache.map_or(0, |c| c.bytes_per_entry()),
-        dropped_samples: dropped,
-    };
-    Ok((image, stats))
+    Ok(plan)
 }
 
 impl RenderStats {
@@ -349,6 +404,8 @@ impl RenderStats {
 struct PhotonEstimator<'a> {
     ctx: Ctx<'a>,
     k: usize,
+    /// Gather rays per pixel; `None`: `ctx.gather` in every pixel.
+    plan: Option<&'a GatherPlan>,
     lookup_ns: AtomicU64,
     hits: AtomicU64,
     misses: AtomicU64,
@@ -364,44 +421,48 @@ impl PhotonEstimator<'_> {
 
 impl PixelEstimator for PhotonEstimator<'_> {
     type Row = SampleScratch;
-    type Pixel = PixelSampler;
+    /// The pixel's points, and its gather rays per sample.
+    type Pixel = (PixelSampler, u32);
 
     fn row(&self) -> SampleScratch {
         SampleScratch::new(self.k)
     }
 
-    fn pixel(&self, key: u64) -> PixelSampler {
-        PixelSampler::new(key)
+    fn pixel(&self, key: u64, x: u32, y: u32) -> (PixelSampler, u32) {
+        let g = self.plan.map_or(self.ctx.gather, |p| p.count(x, y));
+        (PixelSampler::new(key), g)
     }
 
     fn radiance(
         &self,
         rays: &CameraRays,
-        sampler: &PixelSampler,
+        (sampler, g): &(PixelSampler, u32),
         sample: Sample,
         rng: &mut Rng,
         sc: &mut SampleScratch,
     ) -> Vec3 {
         let ray = self.camera_ray(rays, sampler, sample);
-        self.ctx.radiance(ray, (sampler, sample.s), rng, sc)
+        self.ctx.radiance(ray, (sampler, sample.s), *g, rng, sc)
     }
 
     fn radiance_batch(
         &self,
         rays: &CameraRays,
-        sampler: &PixelSampler,
+        pixel: &(PixelSampler, u32),
         samples: &[Sample],
         rngs: &mut [Rng],
         sc: &mut SampleScratch,
         out: &mut [Vec3],
     ) {
+        let (sampler, g) = pixel;
         if !self.ctx.batches() {
-            film::one_by_one(self, rays, sampler, samples, rngs, sc, out);
+            film::one_by_one(self, rays, pixel, samples, rngs, sc, out);
             return;
         }
         // The batch's buffers live in the row's scratch, out of it meanwhile.
         let mut batch = std::mem::take(&mut sc.batch);
         batch.start(
+            *g,
             samples
                 .iter()
                 .map(|&sample| (sample.s, self.camera_ray(rays, sampler, sample))),

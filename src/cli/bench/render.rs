@@ -6,7 +6,7 @@
 use crate::cli::common::{open_scene, AssetRootArgs, EmbreeArgs, ThreadArgs};
 use adaptive_pm::engine::{CausticBudget, Mode};
 use adaptive_pm::experiments::render_study::{run_direct_study, run_study, StudyConfig};
-use adaptive_pm::render::RenderConfig;
+use adaptive_pm::render::{GatherAllocation, RenderConfig};
 use serde_json::json;
 
 /// Arguments of `bench render`.
@@ -55,6 +55,9 @@ pub struct RenderBenchArgs {
     /// Final-gather rays per camera sample of the photon render.
     #[arg(long, default_value_t = RenderConfig::new(1, 1).final_gather)]
     pub final_gather: u32,
+    /// How the photon render spreads its gather rays: variance or uniform.
+    #[arg(long, default_value = "variance")]
+    pub gather_allocation: GatherAllocation,
     /// Photons per radiance estimate of the photon render (and its cache).
     #[arg(long, default_value_t = RenderConfig::new(1, 1).k)]
     pub k: usize,
@@ -85,6 +88,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
     let mut render = RenderConfig::new(args.size, args.size);
     render.light_samples = args.light_samples;
     render.final_gather = args.final_gather;
+    render.gather_allocation = args.gather_allocation;
     render.k = args.k;
     render.check()?;
     let cfg = StudyConfig {
@@ -122,6 +126,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
             "threads": pool.current_num_threads(), "loadavg": load.trim(),
             "light_samples": args.light_samples,
             "final_gather": args.final_gather, "k": args.k,
+            "gather_allocation": args.gather_allocation.name(),
             "result": result, "direct": direct,
         }))?
     );
