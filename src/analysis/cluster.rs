@@ -90,12 +90,6 @@ fn lane(a: &[Block], k: usize) -> f32 {
     a[k / L][k % L]
 }
 
-fn swap_lanes(a: &mut [Block], i: usize, j: usize) {
-    let t = lane(a, i);
-    a[i / L][i % L] = lane(a, j);
-    a[j / L][j % L] = t;
-}
-
 /// One block of the linkage: `min(m, d . w)` per lane (`d . w` alone when
 /// `reset`), written one step per loop over the lanes, the form that the
 /// compiler turns into vector instructions (one loop of every step per lane
@@ -193,10 +187,11 @@ impl Live {
 
     fn remove(&mut self, k: usize) {
         let last = self.len - 1;
-        swap_lanes(&mut self.x, k, last);
-        swap_lanes(&mut self.y, k, last);
-        swap_lanes(&mut self.z, k, last);
-        swap_lanes(&mut self.min_dot, k, last);
+        // Flat views: one bounds check per swap, no lane arithmetic.
+        self.x.as_flattened_mut().swap(k, last);
+        self.y.as_flattened_mut().swap(k, last);
+        self.z.as_flattened_mut().swap(k, last);
+        self.min_dot.as_flattened_mut().swap(k, last);
         self.v.swap(k, last);
         self.id.swap(k, last);
         self.len = last;
@@ -229,25 +224,43 @@ impl Live {
             raise_lanes(&mut lanes, &linked);
         }
         let top = largest(&lanes);
-        // Then the lowest id among the samples that reach it (ties are
-        // rare), in the blocks that hold one (a vectorised count per block:
-        // a scalar test of every sample was a third of the clustering).
+        self.lowest_id_at(top)
+    }
+
+    /// The live sample of min-dot `top` with the lowest id (ties are rare),
+    /// looked up in the blocks that hold it (a vectorised test per block),
+    /// by the bit mask of their lanes at `top` (a scalar test of each lane
+    /// of a hit block was a sixth of the clustering).
+    fn lowest_id_at(&self, top: f32) -> Option<usize> {
+        let n = self.len;
         let mut best: Option<usize> = None;
-        for (b, m) in self.min_dot[..blocks].iter().enumerate() {
+        for (b, m) in self.min_dot[..n.div_ceil(L)].iter().enumerate() {
             if !m.iter().fold(false, |hit, &v| hit | (v == top)) {
                 continue;
             }
-            for (j, &v) in m.iter().enumerate() {
-                let k = b * L + j;
+            let mut hits = lanes_at(m, top);
+            while hits != 0 {
+                let k = b * L + hits.trailing_zeros() as usize;
+                hits &= hits - 1;
                 // `k < n`: when no live min-dot beats -inf (NaN from a
                 // non-finite direction), a dead lane's -inf is the top.
-                if k < n && v == top && best.is_none_or(|bk| self.id[k] < self.id[bk]) {
+                if k < n && best.is_none_or(|bk| self.id[k] < self.id[bk]) {
                     best = Some(k);
                 }
             }
         }
         best
     }
+}
+
+/// Bit `j` set when lane `j` of `m` equals `top`.
+#[inline(always)]
+fn lanes_at(m: &Block, top: f32) -> u32 {
+    let mut mask = 0u32;
+    for (j, &v) in m.iter().enumerate() {
+        mask |= u32::from(v == top) << j;
+    }
+    mask
 }
 
 #[cfg(test)]
