@@ -33,11 +33,23 @@ pub const DIFFUSE_LEVEL: f32 = 1.0 / (2.0 * std::f32::consts::PI);
 /// Never; `dirs` and `values` of different lengths are truncated to the
 /// shorter.
 pub fn cluster(dirs: &[Vec3], values: &[f32], variance_limit: f64) -> Vec<Vec<u32>> {
-    let mut c = Live::new(dirs, values);
+    cluster_in(&mut Live::default(), dirs, values, variance_limit)
+}
+
+/// [`cluster`] in the buffers of `c`, which a caller clustering many sample
+/// sets keeps from one to the next (an analysis clusters 24 to 48; their
+/// allocations were a twentieth of it).
+pub(crate) fn cluster_in(
+    c: &mut Live,
+    dirs: &[Vec3],
+    values: &[f32],
+    variance_limit: f64,
+) -> Vec<Vec<u32>> {
+    c.fill(dirs, values);
     let mut groups = Vec::new();
     // The growing group, in one buffer for all of them: each group is
     // copied out at its size (no regrowth, and O(m) memory in all).
-    let mut group = Vec::with_capacity(c.len);
+    let mut group = std::mem::take(&mut c.group);
     while c.len > 0 {
         let seed = c.seed();
         let (sv, s) = (c.v[seed], c.dir(seed));
@@ -62,6 +74,7 @@ pub fn cluster(dirs: &[Vec3], values: &[f32], variance_limit: f64) -> Vec<Vec<u3
         }
         groups.push(group.clone());
     }
+    c.group = group;
     groups
 }
 
@@ -75,7 +88,8 @@ type Block = [f32; L];
 /// whose first `len` lanes are alive (removal swaps with the last alive
 /// lane), so every pass touches only live samples, and fixed-size blocks
 /// let the compiler vectorise it without bounds checks.
-struct Live {
+#[derive(Debug, Default)]
+pub(crate) struct Live {
     x: Vec<Block>,
     y: Vec<Block>,
     z: Vec<Block>,
@@ -84,6 +98,8 @@ struct Live {
     v: Vec<f32>,
     id: Vec<u32>,
     len: usize,
+    /// The buffer of [`cluster_in`]'s growing group.
+    group: Vec<u32>,
 }
 
 fn lane(a: &[Block], k: usize) -> f32 {
@@ -127,34 +143,29 @@ fn largest<'a>(values: impl IntoIterator<Item = &'a f32>) -> f32 {
 }
 
 impl Live {
-    fn new(dirs: &[Vec3], values: &[f32]) -> Self {
+    /// Takes the samples above the diffuse level of `(dirs, values)`,
+    /// in the buffers of the last set. The lanes past `len` are left as
+    /// they are: no pass reads them (the last block's are set to -inf).
+    fn fill(&mut self, dirs: &[Vec3], values: &[f32]) {
         let n = dirs.len().min(values.len());
-        let (mut v, mut id) = (Vec::with_capacity(n), Vec::with_capacity(n));
         let blocks = n.div_ceil(L);
-        let (mut x, mut y, mut z) = (
-            vec![[0.0; L]; blocks],
-            vec![[0.0; L]; blocks],
-            vec![[0.0; L]; blocks],
-        );
+        for a in [&mut self.x, &mut self.y, &mut self.z, &mut self.min_dot] {
+            a.clear();
+            a.resize(blocks, [0.0; L]);
+        }
+        self.v.clear();
+        self.id.clear();
         for i in 0..n {
             if values[i] > DIFFUSE_LEVEL {
-                let k = id.len();
-                x[k / L][k % L] = dirs[i].x;
-                y[k / L][k % L] = dirs[i].y;
-                z[k / L][k % L] = dirs[i].z;
-                v.push(values[i]);
-                id.push(i as u32);
+                let k = self.id.len();
+                self.x[k / L][k % L] = dirs[i].x;
+                self.y[k / L][k % L] = dirs[i].y;
+                self.z[k / L][k % L] = dirs[i].z;
+                self.v.push(values[i]);
+                self.id.push(i as u32);
             }
         }
-        Live {
-            x,
-            y,
-            z,
-            min_dot: vec![[0.0; L]; blocks],
-            len: id.len(),
-            v,
-            id,
-        }
+        self.len = self.id.len();
     }
 
     /// The highest-valued live sample, ties to the lowest id: it seeds the
