@@ -33,11 +33,23 @@ pub const DIFFUSE_LEVEL: f32 = 1.0 / (2.0 * std::f32::consts::PI);
 /// Never; `dirs` and `values` of different lengths are truncated to the
 /// shorter.
 pub fn cluster(dirs: &[Vec3], values: &[f32], variance_limit: f64) -> Vec<Vec<u32>> {
-    let mut c = Live::new(dirs, values);
+    cluster_in(&mut Live::default(), dirs, values, variance_limit)
+}
+
+/// [`cluster`] in the buffers of `c`, which a caller clustering many sample
+/// sets keeps from one to the next (an analysis clusters 24 to 48; their
+/// allocations were a twentieth of it).
+pub(crate) fn cluster_in(
+    c: &mut Live,
+    dirs: &[Vec3],
+    values: &[f32],
+    variance_limit: f64,
+) -> Vec<Vec<u32>> {
+    c.fill(dirs, values);
     let mut groups = Vec::new();
     // The growing group, in one buffer for all of them: each group is
     // copied out at its size (no regrowth, and O(m) memory in all).
-    let mut group = Vec::with_capacity(c.len);
+    let mut group = std::mem::take(&mut c.group);
     while c.len > 0 {
         let seed = c.seed();
         let (sv, s) = (c.v[seed], c.dir(seed));
@@ -62,6 +74,7 @@ pub fn cluster(dirs: &[Vec3], values: &[f32], variance_limit: f64) -> Vec<Vec<u3
         }
         groups.push(group.clone());
     }
+    c.group = group;
     groups
 }
 
@@ -75,7 +88,8 @@ type Block = [f32; L];
 /// whose first `len` lanes are alive (removal swaps with the last alive
 /// lane), so every pass touches only live samples, and fixed-size blocks
 /// let the compiler vectorise it without bounds checks.
-struct Live {
+#[derive(Debug, Default)]
+pub(crate) struct Live {
     x: Vec<Block>,
     y: Vec<Block>,
     z: Vec<Block>,
@@ -84,16 +98,12 @@ struct Live {
     v: Vec<f32>,
     id: Vec<u32>,
     len: usize,
+    /// The buffer of [`cluster_in`]'s growing group.
+    group: Vec<u32>,
 }
 
 fn lane(a: &[Block], k: usize) -> f32 {
     a[k / L][k % L]
-}
-
-fn swap_lanes(a: &mut [Block], i: usize, j: usize) {
-    let t = lane(a, i);
-    a[i / L][i % L] = lane(a, j);
-    a[j / L][j % L] = t;
 }
 
 /// One block of the linkage: `min(m, d . w)` per lane (`d . w` alone when
@@ -133,34 +143,29 @@ fn largest<'a>(values: impl IntoIterator<Item = &'a f32>) -> f32 {
 }
 
 impl Live {
-    fn new(dirs: &[Vec3], values: &[f32]) -> Self {
+    /// Takes the samples above the diffuse level of `(dirs, values)`,
+    /// in the buffers of the last set. The lanes past `len` are left as
+    /// they are: no pass reads them (the last block's are set to -inf).
+    fn fill(&mut self, dirs: &[Vec3], values: &[f32]) {
         let n = dirs.len().min(values.len());
-        let (mut v, mut id) = (Vec::with_capacity(n), Vec::with_capacity(n));
         let blocks = n.div_ceil(L);
-        let (mut x, mut y, mut z) = (
-            vec![[0.0; L]; blocks],
-            vec![[0.0; L]; blocks],
-            vec![[0.0; L]; blocks],
-        );
+        for a in [&mut self.x, &mut self.y, &mut self.z, &mut self.min_dot] {
+            a.clear();
+            a.resize(blocks, [0.0; L]);
+        }
+        self.v.clear();
+        self.id.clear();
         for i in 0..n {
             if values[i] > DIFFUSE_LEVEL {
-                let k = id.len();
-                x[k / L][k % L] = dirs[i].x;
-                y[k / L][k % L] = dirs[i].y;
-                z[k / L][k % L] = dirs[i].z;
-                v.push(values[i]);
-                id.push(i as u32);
+                let k = self.id.len();
+                self.x[k / L][k % L] = dirs[i].x;
+                self.y[k / L][k % L] = dirs[i].y;
+                self.z[k / L][k % L] = dirs[i].z;
+                self.v.push(values[i]);
+                self.id.push(i as u32);
             }
         }
-        Live {
-            x,
-            y,
-            z,
-            min_dot: vec![[0.0; L]; blocks],
-            len: id.len(),
-            v,
-            id,
-        }
+        self.len = self.id.len();
     }
 
     /// The highest-valued live sample, ties to the lowest id: it seeds the
@@ -193,10 +198,11 @@ impl Live {
 
     fn remove(&mut self, k: usize) {
         let last = self.len - 1;
-        swap_lanes(&mut self.x, k, last);
-        swap_lanes(&mut self.y, k, last);
-        swap_lanes(&mut self.z, k, last);
-        swap_lanes(&mut self.min_dot, k, last);
+        // Flat views: one bounds check per swap, no lane arithmetic.
+        self.x.as_flattened_mut().swap(k, last);
+        self.y.as_flattened_mut().swap(k, last);
+        self.z.as_flattened_mut().swap(k, last);
+        self.min_dot.as_flattened_mut().swap(k, last);
         self.v.swap(k, last);
         self.id.swap(k, last);
         self.len = last;
@@ -229,25 +235,43 @@ impl Live {
             raise_lanes(&mut lanes, &linked);
         }
         let top = largest(&lanes);
-        // Then the lowest id among the samples that reach it (ties are
-        // rare), in the blocks that hold one (a vectorised count per block:
-        // a scalar test of every sample was a third of the clustering).
+        self.lowest_id_at(top)
+    }
+
+    /// The live sample of min-dot `top` with the lowest id (ties are rare),
+    /// looked up in the blocks that hold it (a vectorised test per block),
+    /// by the bit mask of their lanes at `top` (a scalar test of each lane
+    /// of a hit block was a sixth of the clustering).
+    fn lowest_id_at(&self, top: f32) -> Option<usize> {
+        let n = self.len;
         let mut best: Option<usize> = None;
-        for (b, m) in self.min_dot[..blocks].iter().enumerate() {
+        for (b, m) in self.min_dot[..n.div_ceil(L)].iter().enumerate() {
             if !m.iter().fold(false, |hit, &v| hit | (v == top)) {
                 continue;
             }
-            for (j, &v) in m.iter().enumerate() {
-                let k = b * L + j;
+            let mut hits = lanes_at(m, top);
+            while hits != 0 {
+                let k = b * L + hits.trailing_zeros() as usize;
+                hits &= hits - 1;
                 // `k < n`: when no live min-dot beats -inf (NaN from a
                 // non-finite direction), a dead lane's -inf is the top.
-                if k < n && v == top && best.is_none_or(|bk| self.id[k] < self.id[bk]) {
+                if k < n && best.is_none_or(|bk| self.id[k] < self.id[bk]) {
                     best = Some(k);
                 }
             }
         }
         best
     }
+}
+
+/// Bit `j` set when lane `j` of `m` equals `top`.
+#[inline(always)]
+fn lanes_at(m: &Block, top: f32) -> u32 {
+    let mut mask = 0u32;
+    for (j, &v) in m.iter().enumerate() {
+        mask |= u32::from(v == top) << j;
+    }
+    mask
 }
 
 #[cfg(test)]

@@ -170,75 +170,109 @@ impl Directionality {
 /// stay those of the whole set.
 pub fn find_peaks(dirs: &[Vec3], values: &[f32], drawn: usize, p: &AnalysisParams) -> Vec<Peak> {
     let phis: Vec<f32> = dirs.iter().map(|&w| crate::sampling::phi_of(w)).collect();
-    peaks_of(dirs, &phis, values, drawn, p)
+    Scratch::default().peaks_of(dirs, &phis, values, drawn, p)
 }
 
-/// [`find_peaks`] with each direction's azimuth `phis[i] = phi_of(dirs[i])`
-/// given (the sampling computed them for the strata already).
-fn peaks_of(
-    dirs: &[Vec3],
-    phis: &[f32],
-    values: &[f32],
-    drawn: usize,
-    p: &AnalysisParams,
-) -> Vec<Peak> {
-    let n = values.len().max(1) as f64;
-    let mean = values.iter().map(|&v| v as f64).sum::<f64>() / n;
-    let global = values
-        .iter()
-        .map(|&v| (v as f64 - mean).powi(2))
-        .sum::<f64>()
-        / n;
-    let level = p.peak_variance_fraction as f64 * global;
-    let min_samples = p.min_peak_fraction as f64 * drawn.max(values.len()) as f64;
-    let keep = |d: &[Vec3], a: &[f32], v: &[f32]| {
-        cluster::cluster(d, v, level)
-            .into_iter()
-            .filter(|g| g.len() as f64 >= min_samples)
-            .map(|g| peak(&g, d, a, v))
-            .collect::<Vec<_>>()
-    };
-    if dirs.iter().all(|d| d.z >= 0.0) {
-        // One side (every hemisphere's set): no copies.
-        return keep(dirs, phis, values);
+/// The buffers of steps 3-4, kept from one sample set to the next (an
+/// analysis has 24; their allocations were a twentieth of its work).
+#[derive(Debug, Default)]
+struct Scratch {
+    live: cluster::Live,
+    /// One side's samples, when a set has both.
+    side_dirs: Vec<Vec3>,
+    side_phis: Vec<f32>,
+    side_values: Vec<f32>,
+    /// One group's directions and azimuths.
+    group_dirs: Vec<Vec3>,
+    group_phis: Vec<f32>,
+}
+
+impl Scratch {
+    /// [`find_peaks`] with each direction's azimuth `phis[i] =
+    /// phi_of(dirs[i])` given (the sampling computed them for the strata
+    /// already).
+    fn peaks_of(
+        &mut self,
+        dirs: &[Vec3],
+        phis: &[f32],
+        values: &[f32],
+        drawn: usize,
+        p: &AnalysisParams,
+    ) -> Vec<Peak> {
+        let n = values.len().max(1) as f64;
+        let mean = values.iter().map(|&v| v as f64).sum::<f64>() / n;
+        let global = values
+            .iter()
+            .map(|&v| (v as f64 - mean).powi(2))
+            .sum::<f64>()
+            / n;
+        let level = p.peak_variance_fraction as f64 * global;
+        let min_samples = p.min_peak_fraction as f64 * drawn.max(values.len()) as f64;
+        let mut peaks = Vec::new();
+        if dirs.iter().all(|d| d.z >= 0.0) {
+            // One side (every hemisphere's set): no copies.
+            self.keep(dirs, phis, values, (level, min_samples), &mut peaks);
+            return peaks;
+        }
+        for above in [true, false] {
+            let (mut d, mut a, mut v) = (
+                std::mem::take(&mut self.side_dirs),
+                std::mem::take(&mut self.side_phis),
+                std::mem::take(&mut self.side_values),
+            );
+            d.clear();
+            a.clear();
+            v.clear();
+            for (i, w) in dirs.iter().enumerate() {
+                if (w.z >= 0.0) == above {
+                    d.push(*w);
+                    a.push(phis[i]);
+                    v.push(values[i]);
+                }
+            }
+            if !d.is_empty() {
+                self.keep(&d, &a, &v, (level, min_samples), &mut peaks);
+            }
+            (self.side_dirs, self.side_phis, self.side_values) = (d, a, v);
+        }
+        peaks
     }
-    let (mut above, mut below) = (
-        Vec::with_capacity(dirs.len()),
-        Vec::with_capacity(dirs.len()),
-    );
-    for (i, d) in dirs.iter().enumerate() {
-        if d.z >= 0.0 {
-            above.push(i)
-        } else {
-            below.push(i)
+
+    /// Clusters one side and appends its groups of at least `min_samples`
+    /// as peaks; `level` is the clustering's variance limit.
+    fn keep(
+        &mut self,
+        dirs: &[Vec3],
+        phis: &[f32],
+        values: &[f32],
+        (level, min_samples): (f64, f64),
+        peaks: &mut Vec<Peak>,
+    ) {
+        for g in cluster::cluster_in(&mut self.live, dirs, values, level) {
+            if g.len() as f64 >= min_samples {
+                peaks.push(self.peak(&g, dirs, phis, values));
+            }
         }
     }
-    [above, below]
-        .into_iter()
-        .filter(|side| !side.is_empty())
-        .flat_map(|side| {
-            let d: Vec<Vec3> = side.iter().map(|&i| dirs[i]).collect();
-            let a: Vec<f32> = side.iter().map(|&i| phis[i]).collect();
-            let v: Vec<f32> = side.iter().map(|&i| values[i]).collect();
-            keep(&d, &a, &v)
-        })
-        .collect()
-}
 
-/// A kept group's solid angle, mean value and mean direction.
-fn peak(group: &[u32], dirs: &[Vec3], phis: &[f32], values: &[f32]) -> Peak {
-    let d: Vec<Vec3> = group.iter().map(|&i| dirs[i as usize]).collect();
-    let mut a: Vec<f32> = group.iter().map(|&i| phis[i as usize]).collect();
-    let mean_value = group
-        .iter()
-        .map(|&i| values[i as usize] as f64)
-        .sum::<f64>()
-        / group.len() as f64;
-    Peak {
-        samples: group.len(),
-        solid_angle: solid_angle::solid_angle_at(&d, &mut a),
-        mean_value: mean_value as f32,
-        direction: d.iter().copied().sum::<Vec3>().normalize_or_zero(),
+    /// A kept group's solid angle, mean value and mean direction.
+    fn peak(&mut self, group: &[u32], dirs: &[Vec3], phis: &[f32], values: &[f32]) -> Peak {
+        let (d, a) = (&mut self.group_dirs, &mut self.group_phis);
+        d.clear();
+        d.extend(group.iter().map(|&i| dirs[i as usize]));
+        a.clear();
+        a.extend(group.iter().map(|&i| phis[i as usize]));
+        let mean_value = group
+            .iter()
+            .map(|&i| values[i as usize] as f64)
+            .sum::<f64>()
+            / group.len() as f64;
+        Peak {
+            samples: group.len(),
+            solid_angle: solid_angle::solid_angle_at(d, a),
+            mean_value: mean_value as f32,
+            direction: d.iter().copied().sum::<Vec3>().normalize_or_zero(),
+        }
     }
 }
 
@@ -254,8 +288,9 @@ fn paper(target: Target<'_>, est: Estimator, p: &AnalysisParams) -> Directionali
     }
     let t = Instant::now();
     let (mut sum, mut first, mut start) = (0.0f64, None, 0);
+    let mut scratch = Scratch::default();
     for &end in &set.set_ends {
-        let peaks = peaks_of(
+        let peaks = scratch.peaks_of(
             &set.dirs[start..end],
             &set.phis[start..end],
             &set.values[start..end],

@@ -13,7 +13,7 @@
 //! blow it up.
 
 use super::AnalysisParams;
-use crate::brdf::Brdf;
+use crate::brdf::{Brdf, BrdfAt};
 use crate::rng::{hash2, Rng};
 use crate::sampling::{cos_power_hemisphere, luminance, reflect_z, spherical_direction};
 use glam::Vec3;
@@ -48,34 +48,11 @@ impl Target<'_> {
         }
     }
 
-    /// A BRDF's [`Self::value`] and sampling pdf in direction `w`, in one
-    /// evaluation where the model has one (rough glass: the microfacet
-    /// normal is recovered once), the same bits as the two calls.
-    fn value_and_pdf(b: &Brdf, wi: Vec3, w: Vec3) -> (f32, f32) {
-        match b {
-            Brdf::RoughDielectric(d) => {
-                let (f, pdf) = d.eval_and_pdf(wi, w);
-                (luminance(f).max(0.0), pdf)
-            }
-            _ => (luminance(b.eval(wi, w)).max(0.0), b.pdf(wi, w)),
-        }
-    }
-
-    /// A sampled direction, the function's [`Self::value`] there and the
-    /// sampling pdf. A BRDF's value is the one its sampler weighed the
-    /// sample with (the same bits as `value` for the reflecting models;
-    /// rough glass evaluates it at the sampled microfacet normal, which
-    /// `value` recovers from the directions to within rounding), so that
-    /// `f` is not evaluated twice.
-    fn sample(&self, u: [f32; 2]) -> Option<(Vec3, f32, f32)> {
+    /// The target with what its sampler needs of `wi` alone computed once.
+    fn prepare(&self) -> Prepared<'_> {
         match *self {
-            Target::CosN(n) => {
-                let w = cos_power_hemisphere(n, u);
-                Some((w, self.value(w), 0.0))
-            }
-            Target::Brdf(b, wi) => b
-                .sample_with_f(wi, u)
-                .map(|(s, f)| (s.wo, luminance(f).max(0.0), s.pdf)),
+            Target::CosN(n) => Prepared::CosN(n),
+            Target::Brdf(b, wi) => Prepared::Brdf(b.at(wi)),
         }
     }
 
@@ -91,6 +68,41 @@ impl Target<'_> {
             Target::Brdf(b, wi) => hash2(b.key(), wi.z.to_bits() as u64),
         }
     }
+}
+
+/// A [`Target`] prepared for many samples and evaluations ([`BrdfAt`]).
+#[derive(Clone, Copy, Debug)]
+enum Prepared<'a> {
+    CosN(f32),
+    Brdf(BrdfAt<'a>),
+}
+
+impl Prepared<'_> {
+    /// A sampled direction, the function's [`Target::value`] there and the
+    /// sampling pdf. A BRDF's value is the one its sampler weighed the
+    /// sample with (the same bits as `value` for the reflecting models;
+    /// rough glass evaluates it at the sampled microfacet normal, which
+    /// `value` recovers from the directions to within rounding), so that
+    /// `f` is not evaluated twice.
+    fn sample(&self, u: [f32; 2]) -> Option<(Vec3, f32, f32)> {
+        match *self {
+            Prepared::CosN(n) => {
+                let w = cos_power_hemisphere(n, u);
+                Some((w, Target::CosN(n).value(w), 0.0))
+            }
+            Prepared::Brdf(b) => b
+                .sample_with_f(u)
+                .map(|(s, f)| (s.wo, luminance(f).max(0.0), s.pdf)),
+        }
+    }
+}
+
+/// A BRDF's [`Target::value`] and sampling pdf in direction `w`, in one
+/// evaluation where the model has one (rough glass: the microfacet
+/// normal is recovered once), the same bits as the two calls.
+fn value_and_pdf(b: &BrdfAt<'_>, w: Vec3) -> (f32, f32) {
+    let (f, pdf) = b.eval_and_pdf(w);
+    (luminance(f).max(0.0), pdf)
 }
 
 /// What step 1 produces.
@@ -282,9 +294,10 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
     let mut raw = Vec::with_capacity(n);
     let mut pdfs = Vec::with_capacity(n);
     let mut set_ends = Vec::with_capacity(p.sets);
+    let prepared = target.prepare();
     for set in 0..p.sets {
         for u in points(&target, placement, set, p) {
-            if let Some((w, value, pdf)) = target.sample(u) {
+            if let Some((w, value, pdf)) = prepared.sample(u) {
                 if (w.z > 0.0 || domain == Domain::Sphere) && w.is_finite() {
                     dirs.push(w);
                     raw.push(value);
@@ -320,6 +333,7 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
             (2.0 * std::f64::consts::PI / (e as f64 + 1.0), strata)
         }
         Target::Brdf(b, wi) => {
+            let b = b.at(wi);
             // Balance heuristic over both sample sets (module docs).
             let mut integral = 0.0f64;
             for ((w, &v), &pdf) in dirs.iter().zip(&raw).zip(&pdfs) {
@@ -329,7 +343,7 @@ pub fn sample(target: Target<'_>, placement: Placement, p: &AnalysisParams) -> S
             let mut strata = Vec::with_capacity(s_count);
             for s in 0..s_count {
                 let c = stratum_centre_in(domain, s, p);
-                let (v, pdf) = Target::value_and_pdf(b, wi, c);
+                let (v, pdf) = value_and_pdf(&b, c);
                 integral += v as f64 / (n as f64 * pdf as f64 + uniform);
                 max_projected = max_projected.max(v * c.z.abs());
                 strata.push(if cnt[s] > 0 {

@@ -20,7 +20,9 @@ pub fn azimuth_arc(phis: &mut [f32]) -> f32 {
     if phis.len() < 2 {
         return 0.0;
     }
-    phis.sort_by(f32::total_cmp);
+    // Unstable is the same order: values equal under `total_cmp` have the
+    // same bits. It sorts without the stable sort's scratch allocation.
+    phis.sort_unstable_by(f32::total_cmp);
     let mut gap = phis[0] + 2.0 * PI - phis[phis.len() - 1];
     for w in phis.windows(2) {
         gap = gap.max(w[1] - w[0]);

@@ -103,11 +103,14 @@ impl CookTorrance {
         super::lobe_share(luminance(f), luminance(self.kd * (Vec3::ONE - f)))
     }
 
-    /// The specular term without the 1/(4 cos_i cos_o) split out: returns
-    /// `F G / (4 cos_i cos_o) * D`.
-    fn specular(&self, wi: Vec3, wo: Vec3) -> Vec3 {
-        let h = (wi + wo).normalize_or_zero();
-        let d = self.d(h);
+    /// The diffuse base's factor of `wi`, `kd / pi (1 - F(cos_i))`.
+    fn diffuse_in(&self, cos_i: f32) -> Vec3 {
+        self.kd * FRAC_1_PI * (Vec3::ONE - schlick(self.f0, cos_i))
+    }
+
+    /// The specular term, `F G / (4 cos_i cos_o) * D`, from the half vector
+    /// `h` and `d = D(h)`, which the pdf needs too.
+    fn specular(&self, wi: Vec3, wo: Vec3, h: Vec3, d: f32) -> Vec3 {
         if d == 0.0 {
             return Vec3::ZERO;
         }
@@ -116,16 +119,36 @@ impl CookTorrance {
         schlick(self.f0, wi.dot(h)) * (d * g / (4.0 * wi.z * wo.z))
     }
 
+    /// [`Self::eval`] above the horizon from `diffuse_in(wi.z)`, `h` and
+    /// `D(h)`.
+    fn eval_given(&self, diffuse_in: Vec3, wi: Vec3, wo: Vec3, h: Vec3, d: f32) -> Vec3 {
+        diffuse_in * (Vec3::ONE - schlick(self.f0, wo.z)) + self.specular(wi, wo, h, d)
+    }
+
+    /// [`Self::pdf`] above the horizon from `p_spec(wi.z)`, `h` and `D(h)`.
+    fn pdf_given(&self, ps: f32, wo: Vec3, h: Vec3, d: f32) -> f32 {
+        let oh = wo.dot(h);
+        let spec = if oh > 0.0 { d * h.z / (4.0 * oh) } else { 0.0 };
+        ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wo.z)
+    }
+
     /// Evaluates the BRDF.
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Vec3::ZERO;
         }
-        let diffuse = self.kd
-            * FRAC_1_PI
-            * (Vec3::ONE - schlick(self.f0, wi.z))
-            * (Vec3::ONE - schlick(self.f0, wo.z));
-        diffuse + self.specular(wi, wo)
+        let h = (wi + wo).normalize_or_zero();
+        self.eval_given(self.diffuse_in(wi.z), wi, wo, h, self.d(h))
+    }
+
+    /// This BRDF seen from `wi`, for many pairs and samples from it.
+    pub(crate) fn at(&self, wi: Vec3) -> CookTorranceAt<'_> {
+        CookTorranceAt {
+            b: self,
+            wi,
+            p_spec: self.p_spec(wi.z),
+            diffuse_in: self.diffuse_in(wi.z),
+        }
     }
 
     /// A Beckmann half vector, `pdf(h) = D(h) cos theta_h`.
@@ -146,19 +169,7 @@ impl CookTorrance {
         if wi.z <= 0.0 {
             return None;
         }
-        let ps = self.p_spec(wi.z);
-        let wo = match super::pick_lobe(u[0], ps) {
-            (true, u0) => {
-                let h = self.sample_h([u0, u[1]]);
-                2.0 * wi.dot(h) * h - wi
-            }
-            (false, u0) => cosine_hemisphere([u0, u[1]]),
-        };
-        if wo.z <= 0.0 {
-            return None;
-        }
-        let f = self.eval(wi, wo);
-        super::weighted_sample(wo, self.pdf(wi, wo), f).map(|s| (s, f))
+        self.at(wi).sample_with_f(u)
     }
 
     /// Solid-angle pdf of [`CookTorrance::sample`].
@@ -166,15 +177,8 @@ impl CookTorrance {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return 0.0;
         }
-        let ps = self.p_spec(wi.z);
         let h = (wi + wo).normalize_or_zero();
-        let oh = wo.dot(h);
-        let spec = if oh > 0.0 {
-            self.d(h) * h.z / (4.0 * oh)
-        } else {
-            0.0
-        };
-        ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wo.z)
+        self.pdf_given(self.p_spec(wi.z), wo, h, self.d(h))
     }
 
     /// Directional albedo. Diffuse part in closed form
@@ -205,6 +209,56 @@ impl CookTorrance {
             }
         }
         diffuse + spec / (N * N) as f32
+    }
+}
+
+/// A Cook–Torrance BRDF seen from one `wi` ([`CookTorrance::at`]), with
+/// the lobe choice's probability and the diffuse base's factor of `wi`
+/// computed once, and `f` and the pdf of a pair from one half vector and
+/// one `D`: the directionality analysis samples and evaluates thousands of
+/// directions from one `wi`. The operations per pair are those of the
+/// per-pair methods, so the bits are theirs.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CookTorranceAt<'a> {
+    b: &'a CookTorrance,
+    wi: Vec3,
+    p_spec: f32,
+    diffuse_in: Vec3,
+}
+
+impl CookTorranceAt<'_> {
+    /// `(eval(wi, wo), pdf(wi, wo))`.
+    pub(crate) fn eval_and_pdf(&self, wo: Vec3) -> (Vec3, f32) {
+        let (b, wi) = (self.b, self.wi);
+        if wi.z <= 0.0 || wo.z <= 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        let h = (wi + wo).normalize_or_zero();
+        let d = b.d(h);
+        (
+            b.eval_given(self.diffuse_in, wi, wo, h, d),
+            b.pdf_given(self.p_spec, wo, h, d),
+        )
+    }
+
+    /// [`CookTorrance::sample_with_f`] from this `wi`.
+    pub(crate) fn sample_with_f(&self, u: [f32; 2]) -> Option<(BrdfSample, Vec3)> {
+        let (b, wi) = (self.b, self.wi);
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let wo = match super::pick_lobe(u[0], self.p_spec) {
+            (true, u0) => {
+                let h = b.sample_h([u0, u[1]]);
+                2.0 * wi.dot(h) * h - wi
+            }
+            (false, u0) => cosine_hemisphere([u0, u[1]]),
+        };
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let (f, pdf) = self.eval_and_pdf(wo);
+        super::weighted_sample(wo, pdf, f).map(|s| (s, f))
     }
 }
 

@@ -69,18 +69,31 @@ impl Ggx {
 
     /// Height-correlated masking-shadowing `G(wi, wo)` (Heitz 2014).
     pub(crate) fn g(&self, wi: Vec3, wo: Vec3) -> f32 {
-        1.0 / (1.0 + self.lambda(wi) + self.lambda(wo))
+        self.g_given(self.lambda(wi), wo)
+    }
+
+    /// [`Self::g`] from `Lambda(wi)`, for many `wo` from one `wi`.
+    #[inline]
+    pub(crate) fn g_given(&self, lambda_wi: f32, wo: Vec3) -> f32 {
+        1.0 / (1.0 + lambda_wi + self.lambda(wo))
     }
 
     /// The density of normals visible from `wi`,
     /// `D_wi(m) = G1(wi) D(m) |wi.m| / |wi.z|` (0 for a normal facing away
     /// from `wi`).
     pub(crate) fn d_visible(&self, wi: Vec3, m: Vec3) -> f32 {
+        Self::d_visible_given(self.g1(wi), self.d(m), wi, m)
+    }
+
+    /// [`Self::d_visible`] from `G1(wi)` and `D(m)`, which the callers that
+    /// evaluate many pairs, or `D` for `f` too, have already.
+    #[inline]
+    pub(crate) fn d_visible_given(g1_wi: f32, d_m: f32, wi: Vec3, m: Vec3) -> f32 {
         let im = wi.dot(m);
         if im * wi.z <= 0.0 {
             return 0.0;
         }
-        self.g1(wi) * self.d(m) * im.abs() / wi.z.abs()
+        g1_wi * d_m * im.abs() / wi.z.abs()
     }
 
     /// A microfacet normal drawn from [`Self::d_visible`] (pbrt-v4
@@ -88,6 +101,13 @@ impl Ggx {
     /// projected visible hemisphere of the stretched `wi` (of `-wi` when
     /// `wi` is below the surface).
     pub(crate) fn sample_m(&self, wi: Vec3, u: [f32; 2]) -> Vec3 {
+        self.visible_frame(wi).sample_m(u)
+    }
+
+    /// The frame of the stretched `wi` that [`Self::sample_m`] warps its
+    /// disk point in: it depends on `wi` alone, so a caller drawing many
+    /// normals from one `wi` builds it once.
+    pub(crate) fn visible_frame(&self, wi: Vec3) -> VisibleFrame {
         let a = self.alpha;
         let mut wh = Vec3::new(a * wi.x, a * wi.y, wi.z).normalize();
         if wh.z < 0.0 {
@@ -99,15 +119,7 @@ impl Ggx {
             Vec3::X
         };
         let t2 = wh.cross(t1);
-        let r = u[0].sqrt();
-        let phi = 2.0 * PI * u[1];
-        let (px, py) = (r * phi.cos(), r * phi.sin());
-        let h = (1.0 - px * px).max(0.0).sqrt();
-        let s = 0.5 * (1.0 + wh.z);
-        let py = (1.0 - s) * h + s * py;
-        let pz = (1.0 - px * px - py * py).max(0.0).sqrt();
-        let nh = px * t1 + py * t2 + pz * wh;
-        Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-6)).normalize()
+        VisibleFrame { a, wh, t1, t2 }
     }
 
     /// Moments of the normals visible from `wi` (upper hemisphere), by a
@@ -145,6 +157,32 @@ impl Ggx {
             shadowed_schlick: (ew / n) as f32,
             schlick: (w_all / n) as f32,
         }
+    }
+}
+
+/// [`Ggx::visible_frame`]: the stretched `wi` (turned to +z) and two
+/// tangents, and alpha.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct VisibleFrame {
+    a: f32,
+    wh: Vec3,
+    t1: Vec3,
+    t2: Vec3,
+}
+
+impl VisibleFrame {
+    /// [`Ggx::sample_m`] in this frame.
+    pub(crate) fn sample_m(&self, u: [f32; 2]) -> Vec3 {
+        let VisibleFrame { a, wh, t1, t2 } = *self;
+        let r = u[0].sqrt();
+        let phi = 2.0 * PI * u[1];
+        let (px, py) = (r * phi.cos(), r * phi.sin());
+        let h = (1.0 - px * px).max(0.0).sqrt();
+        let s = 0.5 * (1.0 + wh.z);
+        let py = (1.0 - s) * h + s * py;
+        let pz = (1.0 - px * px - py * py).max(0.0).sqrt();
+        let nh = px * t1 + py * t2 + pz * wh;
+        Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-6)).normalize()
     }
 }
 

@@ -125,6 +125,42 @@ macro_rules! dispatch {
     };
 }
 
+/// A BRDF seen from one `wi` ([`Brdf::at`]): a model whose sampler and
+/// evaluation share work that depends on `wi` alone, or on the pair (the
+/// half vector), does it once here;
+/// the others are called per pair. The bits are those of the per-pair
+/// calls.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum BrdfAt<'a> {
+    /// Cook–Torrance: the lobe choice's probability, the diffuse factor.
+    CookTorrance(cook_torrance::CookTorranceAt<'a>),
+    /// Rough glass: the visible-normal frame, `Lambda(wi)` and `G1(wi)`.
+    RoughDielectric(rough_dielectric::RoughDielectricAt<'a>),
+    /// Any other model, and its `wi`.
+    Other(&'a Brdf, Vec3),
+}
+
+impl BrdfAt<'_> {
+    /// [`Brdf::sample_with_f`] from this `wi`.
+    pub(crate) fn sample_with_f(&self, u: [f32; 2]) -> Option<(BrdfSample, Vec3)> {
+        match self {
+            BrdfAt::CookTorrance(b) => b.sample_with_f(u),
+            BrdfAt::RoughDielectric(b) => b.sample_with_f(u, Transport::Flux),
+            BrdfAt::Other(b, wi) => b.sample_with_f(*wi, u),
+        }
+    }
+
+    /// `(Brdf::eval(wi, wo), Brdf::pdf(wi, wo))`, from one recovery of the
+    /// microfacet normal where the model has one.
+    pub(crate) fn eval_and_pdf(&self, wo: Vec3) -> (Vec3, f32) {
+        match self {
+            BrdfAt::CookTorrance(b) => b.eval_and_pdf(wo),
+            BrdfAt::RoughDielectric(b) => b.eval_and_pdf(wo),
+            BrdfAt::Other(b, wi) => (b.eval(*wi, wo), b.pdf(*wi, wo)),
+        }
+    }
+}
+
 impl Brdf {
     /// `f(wi, wo)` per RGB channel (sr^-1) for photons ([`Transport::Flux`]);
     /// 0 below the horizon of a reflecting model.
@@ -180,6 +216,16 @@ impl Brdf {
             _ => self
                 .sample(wi, u)
                 .map(|s| (s, self.eval_in(wi, s.wo, Transport::Flux))),
+        }
+    }
+
+    /// This BRDF seen from `wi`, for many directions from it (the
+    /// directionality analysis samples and evaluates thousands).
+    pub(crate) fn at(&self, wi: Vec3) -> BrdfAt<'_> {
+        match self {
+            Brdf::CookTorrance(b) => BrdfAt::CookTorrance(b.at(wi)),
+            Brdf::RoughDielectric(b) => BrdfAt::RoughDielectric(b.at(wi)),
+            _ => BrdfAt::Other(self, wi),
         }
     }
 

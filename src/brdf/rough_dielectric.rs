@@ -82,7 +82,7 @@ use super::dielectric::{
     check_attenuation, check_ior, fresnel_dielectric, radiance_scale, refract,
     thin_slab_reflectance, Transport,
 };
-use super::ggx::Ggx;
+use super::ggx::{Ggx, VisibleFrame};
 use super::phong::check_rgb01;
 use super::BrdfSample;
 use crate::error::{Error, Result};
@@ -123,6 +123,89 @@ fn fresnel_pair(c_i: f32, c_o: f32, eta_i: f32, eta_o: f32) -> f32 {
 fn third_uniform(u: [f32; 2]) -> f32 {
     let h = hash2(u[0].to_bits() as u64, u[1].to_bits() as u64);
     (h >> 40) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// `wi` and what the lobes need of it alone: `Lambda(wi)` and `G1(wi)`.
+#[derive(Clone, Copy, Debug)]
+struct Incident {
+    wi: Vec3,
+    lambda: f32,
+    g1: f32,
+}
+
+/// A rough glass seen from one `wi` ([`RoughDielectric::at`]), with what its
+/// lobes and its sampler need of `wi` alone computed once: the
+/// directionality analysis samples and evaluates thousands of directions
+/// from one `wi`. The operations per pair are those of the per-pair
+/// methods, so the bits are theirs.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RoughDielectricAt<'a> {
+    b: &'a RoughDielectric,
+    inc: Incident,
+    frame: VisibleFrame,
+}
+
+impl RoughDielectricAt<'_> {
+    /// [`RoughDielectric::eval_and_pdf`] from this `wi`.
+    pub(crate) fn eval_and_pdf(&self, wo: Vec3) -> (Vec3, f32) {
+        self.b.eval_pdf(&self.inc, wo, Transport::Flux)
+    }
+
+    /// [`RoughDielectric::sample_with_f`] from this `wi`.
+    pub(crate) fn sample_with_f(&self, u: [f32; 2], mode: Transport) -> Option<(BrdfSample, Vec3)> {
+        let (b, wi) = (self.b, self.inc.wi);
+        if !wi.is_finite() || wi.z == 0.0 {
+            return None;
+        }
+        if b.is_delta() {
+            let s = BrdfSample {
+                wo: -wi,
+                weight: b.tint,
+                pdf: 0.0,
+                specular: true,
+            };
+            return Some((s, Vec3::ZERO));
+        }
+        let m = self.frame.sample_m(u);
+        let im = wi.dot(m);
+        if im * wi.z <= 0.0 {
+            return None;
+        }
+        let reflected = (2.0 * im * m - wi).normalize();
+        let r = b.reflectance(im);
+        let (wo, (f, pdf)) = if third_uniform(u) < r {
+            if reflected.z * wi.z <= 0.0 {
+                return None;
+            }
+            (
+                reflected,
+                b.reflection_lobe(&self.inc, reflected, m, false, r),
+            )
+        } else if b.thin {
+            let wo = flip_z(reflected);
+            if reflected.z * wi.z <= 0.0 {
+                return None;
+            }
+            (wo, b.reflection_lobe(&self.inc, reflected, m, true, r))
+        } else {
+            let wo = refract(wi, m, b.ior)?.normalize();
+            if wo.z * wi.z >= 0.0 {
+                return None;
+            }
+            (wo, b.refraction_lobe(&self.inc, wo, m, mode, r))
+        };
+        if pdf.is_nan() || pdf <= 0.0 {
+            return None;
+        }
+        let weight = f * (wo.z.abs() / pdf);
+        let s = BrdfSample {
+            wo,
+            weight,
+            pdf,
+            specular: false,
+        };
+        weight.is_finite().then_some((s, f))
+    }
 }
 
 impl RoughDielectric {
@@ -196,24 +279,61 @@ impl RoughDielectric {
         }
     }
 
+    /// What the lobes need of `wi` alone.
+    fn incident(&self, wi: Vec3) -> Incident {
+        let lambda = self.ggx.lambda(wi);
+        Incident {
+            wi,
+            lambda,
+            g1: 1.0 / (1.0 + lambda),
+        }
+    }
+
+    /// This glass seen from `wi`, for many pairs and samples from it.
+    pub(crate) fn at(&self, wi: Vec3) -> RoughDielectricAt<'_> {
+        RoughDielectricAt {
+            b: self,
+            inc: self.incident(wi),
+            frame: self.ggx.visible_frame(wi),
+        }
+    }
+
     /// `(f, pdf)` of a reflected pair with microfacet normal `m`
     /// (`wr = wo`, or the mirrored `wo` of a thin transmission, then `f` is
-    /// tinted and weighted 1 - R').
-    fn reflection_lobe(&self, wi: Vec3, wr: Vec3, m: Vec3, transmitted: bool) -> (Vec3, f32) {
+    /// tinted and weighted 1 - R'), `r` the [`Self::reflectance`] at
+    /// `wi.m` (the sampler has it already).
+    fn reflection_lobe(
+        &self,
+        inc: &Incident,
+        wr: Vec3,
+        m: Vec3,
+        transmitted: bool,
+        r: f32,
+    ) -> (Vec3, f32) {
+        let wi = inc.wi;
         let im = wi.dot(m);
-        let r = self.reflectance(im);
         let (p, colour) = if transmitted {
             (1.0 - r, self.tint)
         } else {
             (r, Vec3::ONE)
         };
-        let lobe = self.ggx.d(m) * self.ggx.g(wi, wr) / (4.0 * (wi.z * wr.z).abs());
-        let pdf = self.ggx.d_visible(wi, m) / (4.0 * im.abs()) * p;
+        let d = self.ggx.d(m);
+        let lobe = d * self.ggx.g_given(inc.lambda, wr) / (4.0 * (wi.z * wr.z).abs());
+        let pdf = Ggx::d_visible_given(inc.g1, d, wi, m) / (4.0 * im.abs()) * p;
         (colour * (lobe * p), pdf)
     }
 
-    /// `(f, pdf)` of a refracted pair with microfacet normal `m` (not thin).
-    fn refraction_lobe(&self, wi: Vec3, wo: Vec3, m: Vec3, mode: Transport) -> (Vec3, f32) {
+    /// `(f, pdf)` of a refracted pair with microfacet normal `m` (not thin),
+    /// `r = F(wi.m)` (the sampler has it already).
+    fn refraction_lobe(
+        &self,
+        inc: &Incident,
+        wo: Vec3,
+        m: Vec3,
+        mode: Transport,
+        r: f32,
+    ) -> (Vec3, f32) {
+        let wi = inc.wi;
         let (eta_i, eta_o) = if wi.z > 0.0 {
             (1.0, self.ior)
         } else {
@@ -227,17 +347,19 @@ impl RoughDielectric {
         // (wi, wo) and accurate near grazing, where the square root of
         // `1 - sin^2` in `fresnel_dielectric` loses digits.
         let t_f = 1.0 - fresnel_pair(im.abs(), om.abs(), eta_i, eta_o);
-        let t_pdf = 1.0 - fresnel_dielectric(im, self.ior);
+        let t_pdf = 1.0 - r;
+        let d = self.ggx.d(m);
         let f =
-            self.ggx.d(m) * self.ggx.g(wi, wo) * t_f * im.abs() * jacobian / (wi.z * wo.z).abs();
-        let pdf = self.ggx.d_visible(wi, m) * jacobian * t_pdf;
+            d * self.ggx.g_given(inc.lambda, wo) * t_f * im.abs() * jacobian / (wi.z * wo.z).abs();
+        let pdf = Ggx::d_visible_given(inc.g1, d, wi, m) * jacobian * t_pdf;
         (self.tint * (f * radiance_scale(wi.z, self.ior, mode)), pdf)
     }
 
     /// `(f, pdf)` of a pair, the microfacet normal recovered from the
     /// directions; zeros for grazing, degenerate or back-facing pairs.
-    fn eval_pdf(&self, wi: Vec3, wo: Vec3, mode: Transport) -> (Vec3, f32) {
+    fn eval_pdf(&self, inc: &Incident, wo: Vec3, mode: Transport) -> (Vec3, f32) {
         const NONE: (Vec3, f32) = (Vec3::ZERO, 0.0);
+        let wi = inc.wi;
         if self.is_delta() || !(wi.is_finite() && wo.is_finite()) || wi.z == 0.0 || wo.z == 0.0 {
             return NONE;
         }
@@ -266,10 +388,11 @@ impl RoughDielectric {
         if wi.dot(m) * wi.z <= 0.0 || wr.dot(m) * wr.z <= 0.0 {
             return NONE;
         }
+        let r = self.reflectance(wi.dot(m));
         if reflect || self.thin {
-            self.reflection_lobe(wi, wr, m, !reflect)
+            self.reflection_lobe(inc, wr, m, !reflect, r)
         } else {
-            self.refraction_lobe(wi, wo, m, mode)
+            self.refraction_lobe(inc, wo, m, mode, r)
         }
     }
 
@@ -278,20 +401,20 @@ impl RoughDielectric {
     /// transport mode; 0 for grazing, degenerate or back-facing pairs and
     /// when [`Self::is_delta`].
     pub fn eval(&self, wi: Vec3, wo: Vec3, mode: Transport) -> Vec3 {
-        self.eval_pdf(wi, wo, mode).0
+        self.eval_pdf(&self.incident(wi), wo, mode).0
     }
 
     /// Solid-angle pdf of [`RoughDielectric::sample`] (0 when
     /// [`Self::is_delta`]).
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        self.eval_pdf(wi, wo, Transport::Flux).1
+        self.eval_pdf(&self.incident(wi), wo, Transport::Flux).1
     }
 
     /// `(eval(wi, wo, Flux), pdf(wi, wo))` from one recovery of the
     /// microfacet normal: the same bits as the two calls, at half the cost
     /// (the directionality analysis needs both at every stratum centre).
     pub fn eval_and_pdf(&self, wi: Vec3, wo: Vec3) -> (Vec3, f32) {
-        self.eval_pdf(wi, wo, Transport::Flux)
+        self.eval_pdf(&self.incident(wi), wo, Transport::Flux)
     }
 
     /// Samples a visible microfacet normal, then reflection or transmission
@@ -315,50 +438,7 @@ impl RoughDielectric {
         if !wi.is_finite() || wi.z == 0.0 {
             return None;
         }
-        if self.is_delta() {
-            let s = BrdfSample {
-                wo: -wi,
-                weight: self.tint,
-                pdf: 0.0,
-                specular: true,
-            };
-            return Some((s, Vec3::ZERO));
-        }
-        let m = self.ggx.sample_m(wi, u);
-        let im = wi.dot(m);
-        if im * wi.z <= 0.0 {
-            return None;
-        }
-        let reflected = (2.0 * im * m - wi).normalize();
-        let (wo, (f, pdf)) = if third_uniform(u) < self.reflectance(im) {
-            if reflected.z * wi.z <= 0.0 {
-                return None;
-            }
-            (reflected, self.reflection_lobe(wi, reflected, m, false))
-        } else if self.thin {
-            let wo = flip_z(reflected);
-            if reflected.z * wi.z <= 0.0 {
-                return None;
-            }
-            (wo, self.reflection_lobe(wi, reflected, m, true))
-        } else {
-            let wo = refract(wi, m, self.ior)?.normalize();
-            if wo.z * wi.z >= 0.0 {
-                return None;
-            }
-            (wo, self.refraction_lobe(wi, wo, m, mode))
-        };
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        let weight = f * (wo.z.abs() / pdf);
-        let s = BrdfSample {
-            wo,
-            weight,
-            pdf,
-            specular: false,
-        };
-        weight.is_finite().then_some((s, f))
+        self.at(wi).sample_with_f(u, mode)
     }
 
     /// Directional albedo from `wi` (either side): the reflected plus
