@@ -139,7 +139,12 @@ pub(super) fn plan(
     rays: &CameraRays,
     cfg: &CheckedRender,
 ) -> Option<GatherPlan> {
-    if cfg.gather_allocation != GatherAllocation::Variance || !ctx.batches() {
+    // A mean of one ray leaves nothing to move: every pixel gathers with
+    // at least one.
+    if cfg.gather_allocation != GatherAllocation::Variance
+        || !ctx.batches()
+        || cfg.final_gather <= 1
+    {
         return None;
     }
     let start = std::time::Instant::now();
