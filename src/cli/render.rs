@@ -62,7 +62,8 @@ pub struct RenderArgs {
     /// Image height in pixels.
     #[arg(long, default_value_t = 256)]
     pub height: u32,
-    /// Final-gather rays per camera sample (0: read the indirect map at the first hit).
+    /// Final-gather rays per camera sample, on average with --gather-allocation variance
+    /// (0: read the indirect map at the first hit).
     #[arg(long, default_value_t = DEFAULT_GATHER)]
     pub final_gather: u32,
     /// How the gather's rays are spread: variance (that many per sample on

@@ -52,7 +52,7 @@ pub struct RenderBenchArgs {
     /// Light samples (shadow rays) per camera sample of the photon render.
     #[arg(long, default_value_t = RenderConfig::new(1, 1).light_samples)]
     pub light_samples: u32,
-    /// Final-gather rays per camera sample of the photon render.
+    /// Final-gather rays per camera sample of the photon render (on average with --gather-allocation variance).
     #[arg(long, default_value_t = RenderConfig::new(1, 1).final_gather)]
     pub final_gather: u32,
     /// How the photon render spreads its gather rays: variance or uniform.
