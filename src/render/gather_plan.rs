@@ -131,8 +131,10 @@ struct Spread {
 /// pooled deviation and the count.
 const BYTES_PER_PIXEL: u64 = 8 + 8 + 4 + 2;
 
-/// The plan for `cfg` (its whole image, whatever its rows), `None` unless
-/// it gathers with [`GatherAllocation::Variance`].
+/// The plan for `cfg` (its whole image, whatever its rows). `None` unless
+/// it gathers with [`GatherAllocation::Variance`] and more than one ray
+/// on average, or when the plan would not fit in a quarter of the
+/// available memory: the render then gathers uniformly.
 pub(super) fn plan(
     ctx: &Ctx<'_>,
     maps: &RenderMaps,
