@@ -82,9 +82,9 @@ fn spreading_the_gather_keeps_the_images_expectation() {
 /// of other seeds; their ratio's standard error comes from 8 x 8 pixel
 /// blocks (wider than the pilot's pooling square, so blocks are nearly
 /// independent), delta method; the ratio must be below 1 by 4 sigma. Over
-/// 4 sweep seeds it read 0.69 to 0.73, each +- 0.04 (on `door`, 0.54 to
-/// 0.73 but +- 0.08 to 0.14: its fireflies make the noise of the noise
-/// too large for a 4-sigma test of this size).
+/// 14 sweep seeds it read 0.67 to 0.75, each +- 0.035 to 0.041 (on `door`,
+/// 0.54 to 0.73 but +- 0.08 to 0.14: its fireflies make the noise of the
+/// noise too large for a 4-sigma test of this size).
 #[test]
 fn spreading_the_gather_lowers_the_noise_where_it_is_uneven() {
     const SIDE: u32 = 96;
