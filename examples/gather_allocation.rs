@@ -10,7 +10,7 @@
 
 use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
-use adaptive_pm::render::{render_with, GatherAllocation, Image, RenderConfig};
+use adaptive_pm::render::{render_with, rmse, GatherAllocation, Image, RenderConfig};
 use adaptive_pm::scene::Scene;
 use std::time::Instant;
 
@@ -44,7 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 stats.push(s);
             }
             let seconds = start.elapsed().as_secs_f64();
-            let noise = noise(&images[0], &images[1]);
+            let noise = noise(&images[0], &images[1])?;
             let ratio = match uniform_variance {
                 None => {
                     uniform_variance = Some(noise * noise);
@@ -64,13 +64,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// One image's relative rms noise from two independent renders.
-fn noise(a: &Image, b: &Image) -> f64 {
-    let (mut se, mut sum) = (0.0f64, 0.0f64);
-    for (p, q) in a.pixels.iter().zip(&b.pixels) {
-        se += (*p - *q).as_dvec3().length_squared();
-        sum += (*p + *q).as_dvec3().element_sum() / 2.0;
-    }
-    let n = (3 * a.pixels.len()) as f64;
-    (se / n / 2.0).sqrt() / (sum / n)
+/// One image's relative rms noise from two independent renders: the rms of
+/// their difference over `sqrt(2)`, over their mean.
+fn noise(a: &Image, b: &Image) -> Result<f64, adaptive_pm::Error> {
+    let mean = (a.mean() + b.mean()).as_dvec3().element_sum() / 6.0;
+    Ok(rmse(a, b)? / std::f64::consts::SQRT_2 / mean)
 }
