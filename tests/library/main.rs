@@ -52,6 +52,7 @@ mod photon_density;
 mod raycast;
 mod render;
 mod render_cache;
+mod render_cache_sight;
 mod render_progressive;
 mod render_reads;
 mod scene_load;

@@ -22,12 +22,12 @@ use std::sync::Arc;
 /// Spatial batch means: the blocks of side `side` (world units, in the floor
 /// plane) that `x` falls in, for standard errors over points whose estimates
 /// share photons with their neighbours but not with points a block away.
-fn block_of(x: Vec3, side: f32) -> (i64, i64) {
+pub(crate) fn block_of(x: Vec3, side: f32) -> (i64, i64) {
     ((x.x / side).floor() as i64, (x.z / side).floor() as i64)
 }
 
 /// Sums of `(a, b)` pairs per block, in a fixed order.
-fn block_sums(pairs: &[((i64, i64), f64, f64)]) -> Vec<(f64, f64)> {
+pub(crate) fn block_sums(pairs: &[((i64, i64), f64, f64)]) -> Vec<(f64, f64)> {
     let mut m = std::collections::BTreeMap::<(i64, i64), (f64, f64)>::new();
     for &(b, x, y) in pairs {
         let e = m.entry(b).or_default();
@@ -40,7 +40,7 @@ fn block_sums(pairs: &[((i64, i64), f64, f64)]) -> Vec<(f64, f64)> {
 /// The ratio `sum a / sum b - 1` over blocks and its standard error (delta
 /// method over independent blocks: the sd of the residuals
 /// `a_b - R b_b`, times `sqrt(n)`, over `sum b`).
-fn ratio_and_se(blocks: &[(f64, f64)]) -> (f64, f64) {
+pub(crate) fn ratio_and_se(blocks: &[(f64, f64)]) -> (f64, f64) {
     let (sa, sb) = blocks
         .iter()
         .fold((0.0, 0.0), |(x, y), &(a, b)| (x + a, y + b));
@@ -194,7 +194,7 @@ fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
 
 /// Whether something lower than the ceiling (at `top`) stands over the
 /// floor point `x`: a block, under which no photon lands.
-fn roofed(rt: &dyn RayCaster, x: Vec3, top: f32) -> bool {
+pub(crate) fn roofed(rt: &dyn RayCaster, x: Vec3, top: f32) -> bool {
     let up = Ray::new(x + Vec3::Y * 0.01, Vec3::Y);
     rt.intersect(&up).is_some_and(|h| h.t < 0.9 * top)
 }
@@ -203,7 +203,11 @@ fn roofed(rt: &dyn RayCaster, x: Vec3, top: f32) -> bool {
 /// (under the blocks too: the estimates count a floor's photons wherever it
 /// runs, so a uniform density is uniform over all of it), arriving straight
 /// down, and the floor's area.
-fn uniform_floor_photons(scene: &Scene, n: usize, rng: &mut Rng) -> (Vec<PhotonRecord>, f32) {
+pub(crate) fn uniform_floor_photons(
+    scene: &Scene,
+    n: usize,
+    rng: &mut Rng,
+) -> (Vec<PhotonRecord>, f32) {
     let floor: Vec<[Vec3; 3]> = scene
         .meshes()
         .iter()

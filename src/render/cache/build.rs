@@ -2,14 +2,12 @@
 //! cell, the coarse levels (see the parent module for the design and its
 //! bias).
 
-use super::support::kernel_share;
-use super::{
-    to_rgbe, CacheConfig, IrradianceCache, Slot, LEVELS, PLANE_TOLERANCE, SAMPLES_PER_CELL,
-};
+use super::sample_estimate::{Sample, SampleEstimate, SampleEstimator};
+use super::{to_rgbe, CacheConfig, IrradianceCache, Slot, LEVELS, SAMPLES_PER_CELL};
 use crate::error::Result;
-use crate::photon_map::{CompactPhoton, Neighbor, PhotonMap};
+use crate::photon_map::{Neighbor, PhotonMap};
 use crate::raycast::{Ray, RayCaster};
-use crate::render::estimate::{cone_filter, Estimate};
+use crate::render::estimate::Estimate;
 use crate::render::reads::{BuildReads, MapReads};
 use crate::scene::{PreparedScene, Scene};
 use glam::Vec3;
@@ -43,20 +41,16 @@ impl IrradianceCache {
         let (lo, hi) = scene.bounds();
         let diagonal = (hi - lo).length();
         let t = Instant::now();
-        let stride = u64::from(cfg.stride);
-        let plane = PLANE_TOLERANCE * diagonal;
+        let estimator = SampleEstimator::new(full, rt, cfg, diagonal);
         let quant = *full.quantizer();
-        // A coin per photon, from its content: heads (one in `stride`) makes
-        // it a sample, tails a photon that estimates count.
-        let heads = |coin: u64| coin % stride == 0;
-        let is_sample = |c: &CompactPhoton| heads(c.content_hash());
-        // Sample points, their surface normals (one ray each) and coins.
-        let samples: Vec<(Vec3, Vec3, u64)> = full
+        // Sample points, their surface normals (one ray each) and coins: the
+        // photons whose coin comes up heads.
+        let samples: Vec<Sample> = full
             .compact_photons()
             .par_iter()
             .filter_map(|c| {
                 let coin = c.content_hash();
-                if !heads(coin) {
+                if !estimator.heads(coin) {
                     return None;
                 }
                 let p = quant.decode(c);
@@ -64,36 +58,16 @@ impl IrradianceCache {
                 Some((p.position, n, coin))
             })
             .collect();
-        // Estimates count the photons that are not samples, scaled by
-        // `stride / (stride - 1)`. Which cells exist, and which sample a cell
-        // keeps, depend on the samples; an estimate that counted them would
-        // see fewer of them than an independent point does (a cell kept for
-        // its one sample has, per cell, fewer others than the Poisson mean)
-        // and read low: -1.5 % at k = 100 without its own photon, +3 % with
-        // it, whatever the photon count (both measured). The other photons are an
-        // independent thinning of the map, so an estimate from them at any
-        // sample is an estimate at an independent point: no bias from the
-        // choice of points.
-        let scale = stride as f32 / (stride - 1) as f32;
         let scratch = || Scratch {
             neighbors: Vec::with_capacity(cfg.lookup.k),
             marks: reads.map(BuildReads::new),
         };
-        let estimate = |sc: &mut Scratch, (x, n, _): (Vec3, Vec3, u64)| {
-            let scratch = &mut sc.neighbors;
-            full.nearest_k_where(x, cfg.lookup.k, cfg.lookup.max_radius, scratch, |c| {
-                !is_sample(c)
-                    && c.direction_unnormalised().dot(n) <= 0.0
-                    && (quant.position(c) - x).dot(n).abs() <= plane
-            });
+        let estimate = |sc: &mut Scratch, sample: Sample| {
+            let e = estimator.at(sample, &mut sc.neighbors);
             if let Some(marks) = sc.marks.as_mut() {
-                marks.mark(full, scratch);
+                marks.mark(full, &sc.neighbors);
             }
-            let e = cone_filter(full, scratch, cfg.lookup, |_, power| power);
-            Estimate {
-                value: e.value * scale,
-                ..e
-            }
+            e
         };
         let cell = cell_side(&samples, &scratch, &estimate, cfg, diagonal);
         // Cell faces off the round coordinates that walls sit on (a floor at
@@ -123,10 +97,8 @@ impl IrradianceCache {
             .map_init(&scratch, |sc, g| {
                 let sample = samples[Self::pick(&samples, g) as usize];
                 let e = estimate(sc, sample);
-                let (x, n, coin) = sample;
-                let rotation = (coin >> 40) as f32 * (1.0 / 16_777_216.0);
-                let share = kernel_share(rt, x, n, e.radius, plane, rotation);
-                FineCell::new(e, share, cell, cfg.stride)
+                let share = estimator.share(sample.0, &e);
+                FineCell::new(e.estimate, share, cell, cfg.stride)
             })
             .collect();
         cache.fill(&samples, &groups, &values);
@@ -148,12 +120,7 @@ impl IrradianceCache {
     /// above its [`FineCell::natural`] (a blur of at most about twice its own
     /// kernel), and a coarse cell averages only its sparsest cells (of its
     /// highest natural level).
-    fn fill(
-        &mut self,
-        samples: &[(Vec3, Vec3, u64)],
-        groups: &[&[(u64, u32)]],
-        values: &[FineCell],
-    ) {
+    fn fill(&mut self, samples: &[Sample], groups: &[&[(u64, u32)]], values: &[FineCell]) {
         let mut keyed: Vec<(u64, u32)> = (1..LEVELS)
             .flat_map(|level| {
                 let cache = &*self;
@@ -191,7 +158,7 @@ impl IrradianceCache {
 
     /// The sample whose estimate a finest cell holds: the one of `group`
     /// with the least coin hash, a choice that depends on the samples alone.
-    fn pick(samples: &[(Vec3, Vec3, u64)], group: &[(u64, u32)]) -> u32 {
+    fn pick(samples: &[Sample], group: &[(u64, u32)]) -> u32 {
         group
             .iter()
             .map(|&(_, i)| i)
@@ -261,7 +228,7 @@ struct Scratch<'r, 'a> {
 /// subset of the samples, sized so that a cell holds about
 /// [`SAMPLES_PER_CELL`] samples.
 fn cell_side<S, G, F>(
-    samples: &[(Vec3, Vec3, u64)],
+    samples: &[Sample],
     scratch: &G,
     estimate: &F,
     cfg: &CacheConfig,
@@ -269,13 +236,13 @@ fn cell_side<S, G, F>(
 ) -> f32
 where
     G: Fn() -> S + Sync,
-    F: Fn(&mut S, (Vec3, Vec3, u64)) -> Estimate + Sync,
+    F: Fn(&mut S, Sample) -> SampleEstimate + Sync,
 {
     let probe_step = (samples.len() / 1024).max(1);
     let mut radii: Vec<f32> = samples
         .par_iter()
         .step_by(probe_step)
-        .map_init(scratch, |sc, &s| estimate(sc, s).radius)
+        .map_init(scratch, |sc, &s| estimate(sc, s).estimate.radius)
         .collect();
     let mid = radii.len() / 2;
     let median = if radii.is_empty() {

@@ -103,6 +103,7 @@ use crate::rng::mix64;
 use glam::Vec3;
 
 mod build;
+mod sample_estimate;
 mod support;
 
 /// Default: one irradiance sample per this many photons.
