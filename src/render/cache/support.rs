@@ -59,17 +59,18 @@ pub const LEAST_SHARE: f32 = 0.1;
 /// half took in an empty stretch past the wall (a floor under a
 /// partition: the estimate read -4 %) or the next room's photons; read at
 /// the least of neighbouring hits, a disc beside a wall lost a quarter of
-/// its photons and its centroid moved off the wall (the Cornell image read
-/// +0.32 % instead of +0.25 %).
+/// its photons.
 #[derive(Clone, Debug)]
 pub struct Sight {
     frame: Frame,
     rotation: f32,
     /// Each ray's hit distance, infinite where it hit nothing in range.
     reach: [f32; DIRECTIONS as usize],
-    /// Each ray's hit normal in the tangent plane's coordinates, facing the
-    /// centre (unit, zero where it hit nothing or the face lies flat).
-    normal: [(f32, f32); DIRECTIONS as usize],
+    /// The line of each ray's hit face in the tangent plane: its unit
+    /// normal `(nx, ny)` facing the centre and the hit's offset along it
+    /// (negative), so the line is `p . (nx, ny) = offset`; a zero normal
+    /// where the ray hit nothing or the face lies flat.
+    face: [(f32, f32, f32); DIRECTIONS as usize],
     /// Whether any ray hit: if none did, every photon within the range is
     /// in sight.
     blocked: bool,
@@ -110,10 +111,12 @@ impl Sight {
                 let local = sight.frame.local_from_world(facing);
                 let flat = local.x.hypot(local.y);
                 sight.reach[j as usize] = h.t;
-                sight.normal[j as usize] = if flat > 0.0 {
-                    (local.x / flat, local.y / flat)
+                sight.face[j as usize] = if flat > 0.0 {
+                    let (nx, ny) = (local.x / flat, local.y / flat);
+                    let (s, c) = sight.angle(j as f32).sin_cos();
+                    (nx, ny, h.t * (c * nx + s * ny))
                 } else {
-                    (0.0, 0.0)
+                    (0.0, 0.0, 0.0)
                 };
                 sight.blocked = true;
             }
@@ -127,7 +130,7 @@ impl Sight {
             frame: Frame::from_normal(n),
             rotation: 0.0,
             reach: [f32::INFINITY; DIRECTIONS as usize],
-            normal: [(0.0, 0.0); DIRECTIONS as usize],
+            face: [(0.0, 0.0, 0.0); DIRECTIONS as usize],
             blocked: false,
         }
     }
@@ -162,12 +165,10 @@ impl Sight {
     /// face, its hit distance where the face's normal lies off the plane.
     fn to_face(&self, j: usize, phi: f32) -> f32 {
         let d = self.reach[j];
-        let (nx, ny) = self.normal[j];
+        let (nx, ny, at_hit) = self.face[j];
         if !d.is_finite() || (nx == 0.0 && ny == 0.0) {
             return d;
         }
-        let (s, c) = self.angle(j as f32).sin_cos();
-        let at_hit = d * (c * nx + s * ny);
         let (s, c) = phi.sin_cos();
         let toward = c * nx + s * ny;
         if toward < -1e-6 {
