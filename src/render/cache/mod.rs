@@ -102,10 +102,10 @@
 //! A lookup can still read across a wall thinner than its cell: cells are
 //! keyed by their samples' positions, and a coarse cell that spans `door`'s
 //! 15 cm partition and holds only the lit room's cells is read from the
-//! camera's room at the lit room's light (7-9 times the camera room's at
+//! camera's room at the lit room's light (9 times the camera room's at
 //! 0.05 kernel radii from the partition, with the lit room 20 times as
-//! bright; measured, not a test). The cell's own estimate does not cross
-//! the wall.
+//! bright: `examples/door_cache_leak.rs`). The cell's own estimate does
+//! not cross the wall.
 //!
 //! What remains in a finest cell is that its one point is a photon, more
 //! likely in its bright part: `|grad E|^2 h^2 / (12 E)`, second order in `h`.
