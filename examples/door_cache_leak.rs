@@ -58,7 +58,7 @@ fn main() -> adaptive_pm::Result<()> {
                 let p = Vec3::new(400.0 - f * radius, 0.0, z);
                 for _ in 0..4 {
                     let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-                    if let Some(e) = cache.irradiance(p, Vec3::Y, u) {
+                    if let Some(e) = cache.irradiance(p, Vec3::Y, u, prepared.caster()) {
                         sum += f64::from(e.x) / exact;
                         n += 1;
                     }

@@ -376,6 +376,7 @@ fn report(args: &RenderArgs, cfg: &RenderConfig, image: &Image, run: &RunReport)
                 "cache_build_s": stats.cache_build_s,
                 "cache_entries": stats.cache_entries,
                 "cache_bytes_per_entry": stats.cache_bytes_per_entry,
+                "cache_walled": stats.cache_walled,
                 "cache_misses": stats.cache_misses,
                 "dropped_samples": stats.dropped_samples,
                 "mean_rgb": [mean.x, mean.y, mean.z],
@@ -400,8 +401,8 @@ fn report(args: &RenderArgs, cfg: &RenderConfig, image: &Image, run: &RunReport)
     print_noise(&spp);
     let (cache_n, cache_s) = (stats.cache_entries, stats.cache_build_s);
     println!(
-        "{samples_per_s:.0} samples/s, lookups {:.3} s (thread sum), cache {cache_n} cells built in {cache_s:.3} s",
-        stats.lookup_s
+        "{samples_per_s:.0} samples/s, lookups {:.3} s (thread sum), cache {cache_n} cells ({} walled) built in {cache_s:.3} s",
+        stats.lookup_s, stats.cache_walled
     );
     print_caustic(caustic);
     println!("mean RGB {:.4} {:.4} {:.4}", mean.x, mean.y, mean.z);

@@ -240,7 +240,7 @@ impl<'a> Ctx<'a> {
         if let Some(cache) = self.cache {
             let t = sc.start_lookup();
             let [u0, u1] = rng.next_2d();
-            let e = cache.irradiance(y.position, y.normal, [u0, u1, rng.next_f32()]);
+            let e = cache.irradiance(y.position, y.normal, [u0, u1, rng.next_f32()], self.rt);
             sc.end_lookup(t);
             if let Some(e) = e {
                 sc.hits += 1;

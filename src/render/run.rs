@@ -43,6 +43,9 @@ pub struct RenderStats {
     pub cache_entries: usize,
     /// Bytes per cache entry (0 without one).
     pub cache_bytes_per_entry: usize,
+    /// Entries that a wall crosses, read only by lookups that see their
+    /// representative point (0 without a cache).
+    pub cache_walled: usize,
     /// Camera samples whose radiance was NaN or infinite (degenerate
     /// geometry, or a light so close its `I / r^2` overflows f32), left
     /// out of their pixel's mean. Not 0: the image is biased there; the
@@ -318,6 +321,7 @@ fn render_photons(
         cache_build_s: built.as_ref().map_or(0.0, |c| c.build_s),
         cache_entries: cache.map_or(0, |c| c.len()),
         cache_bytes_per_entry: cache.map_or(0, |c| c.bytes_per_entry()),
+        cache_walled: cache.map_or(0, |c| c.walled()),
         dropped_samples: dropped,
         gather_plan_s: planned.as_ref().map_or(0.0, |p| p.seconds),
         mean_gather: plan.map_or(f64::from(estimator.ctx.gather), GatherPlan::mean),
@@ -395,6 +399,7 @@ impl RenderStats {
         if self.cache_entries == 0 {
             self.cache_entries = other.cache_entries;
             self.cache_bytes_per_entry = other.cache_bytes_per_entry;
+            self.cache_walled = other.cache_walled;
         }
     }
 }

@@ -144,7 +144,7 @@ fn cache_matches_the_knn_estimate_on_the_cornell_floor() {
             .map(|_| {
                 let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
                 cache
-                    .irradiance(p.position, p.normal, u)
+                    .irradiance(p.position, p.normal, u, prepared.caster())
                     .expect("every floor point is covered")
                     .x as f64
             })
@@ -285,7 +285,7 @@ fn uniform_floor_cache(
 #[test]
 fn cache_is_unbiased_beside_the_walls() {
     let scene = Scene::open("cornell-empty").unwrap();
-    let (_, cache, exact, mut rng) = uniform_floor_cache(&scene, 200_000, 11);
+    let (prepared, cache, exact, mut rng) = uniform_floor_cache(&scene, 200_000, 11);
     let h = cache.cell_size();
     // The floor: x from 0 (green wall) to 552.8 - 3.2 z / 559.2 (red wall),
     // z from 0 (open) to 559.2 (back wall).
@@ -302,7 +302,7 @@ fn cache_is_unbiased_beside_the_walls() {
             ] {
                 for _ in 0..4 {
                     let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-                    match cache.irradiance(p, Vec3::Y, u) {
+                    match cache.irradiance(p, Vec3::Y, u, prepared.caster()) {
                         Some(e) => lookups.push((block_of(p, 50.0), e.x as f64 / exact, 1.0)),
                         None => misses += 1,
                     }
@@ -357,7 +357,7 @@ fn cache_is_unbiased_on_a_uniform_density() {
         let b = block_of(p.position, side);
         for _ in 0..8 {
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
-            match cache.irradiance(p.position, Vec3::Y, u) {
+            match cache.irradiance(p.position, Vec3::Y, u, prepared.caster()) {
                 Some(e) => lookups.push((b, e.x as f64 / exact, 1.0)),
                 None => misses += 1,
             }
@@ -642,7 +642,7 @@ fn cache_keeps_the_dark_room_dark_on_door() {
                 .map(|_| {
                     let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
                     // A miss falls back to the k-NN estimate in the render.
-                    sum(cache.irradiance(p, n, u).unwrap_or(knn))
+                    sum(cache.irradiance(p, n, u, prepared.caster()).unwrap_or(knn))
                 })
                 .sum::<f64>()
                 / jitters as f64;

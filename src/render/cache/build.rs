@@ -3,7 +3,10 @@
 //! bias).
 
 use super::sample_estimate::{Sample, SampleEstimate, SampleEstimator};
-use super::{to_rgbe, CacheConfig, IrradianceCache, Slot, LEVELS, SAMPLES_PER_CELL};
+use super::{
+    point_key, to_rgbe, walls, CacheConfig, IrradianceCache, Slot, LEVELS, PLANE_TOLERANCE,
+    SAMPLES_PER_CELL,
+};
 use crate::error::Result;
 use crate::photon_map::{Neighbor, PhotonMap};
 use crate::raycast::{Ray, RayCaster};
@@ -80,7 +83,9 @@ impl IrradianceCache {
             cell,
             inv_cell: 1.0 / cell,
             cells: 0,
+            walled: 0,
             samples: samples.len(),
+            lift: PLANE_TOLERANCE * diagonal,
             build_s: 0.0,
         };
         // Finest cells: one k-nearest estimate each, at the sample `pick`
@@ -95,20 +100,39 @@ impl IrradianceCache {
         let values: Vec<FineCell> = groups
             .par_iter()
             .map_init(&scratch, |sc, g| {
-                let sample = samples[Self::pick(&samples, g) as usize];
+                let rep = Self::pick(&samples, g);
+                let sample = samples[rep as usize];
                 let e = estimate(sc, sample);
                 let share = estimator.share(sample.0, &e);
-                FineCell::new(e.estimate, share, cell, cfg.stride)
+                FineCell::new(e.estimate, share, cell, cfg.stride, rep)
             })
             .collect();
-        cache.fill(&samples, &groups, &values);
+        let fine_entries: Vec<Entry> = groups
+            .par_iter()
+            .zip(&values)
+            .map(|(g, v)| cache.fine_entry(rt, &samples, g[0].0, v))
+            .collect();
+        let coarse = cache.coarse_entries(rt, &samples, &groups, &values);
+        cache.fill(&fine_entries, &coarse);
         cache.build_s = t.elapsed().as_secs_f64();
         Ok(cache)
     }
 
-    /// Sizes the table and inserts the finest cells (`groups`, with their
-    /// `values`) and the coarser levels. A coarse cell holds the mean over
-    /// the finest cells inside it, each counted once (a mean over samples
+    /// A finest cell's entry: its estimate, walled where its sample sees a
+    /// face inside its cube ([`walls`]).
+    fn fine_entry(&self, rt: &dyn RayCaster, samples: &[Sample], key: u64, v: &FineCell) -> Entry {
+        let (p, n, _) = samples[v.rep as usize];
+        let (lo, side) = self.cube(p, 0);
+        let walled = walls::crossed(rt, (p, n), self.lift, lo, side);
+        Entry {
+            key,
+            rgbe: to_rgbe(v.value),
+            point: walled.then(|| walls::encode(p, lo, side)),
+        }
+    }
+
+    /// The coarser levels' entries. A coarse cell holds the mean over the
+    /// finest cells inside it, each counted once (a mean over samples
     /// would weight a cell's bright part by its extra photons: a mean of E
     /// weighted by E, too bright by Var E / E), and only over its sparsest.
     ///
@@ -119,11 +143,17 @@ impl IrradianceCache {
     /// room, measured). So a finest cell is averaged into levels up to one
     /// above its [`FineCell::natural`] (a blur of at most about twice its own
     /// kernel), and a coarse cell averages only its sparsest cells (of its
-    /// highest natural level).
-    fn fill(&mut self, samples: &[Sample], groups: &[&[(u64, u32)]], values: &[FineCell]) {
-        let mut keyed: Vec<(u64, u32)> = (1..LEVELS)
+    /// highest natural level), of those only the ones its representative
+    /// (the one with the least coin) sees ([`walls`]).
+    fn coarse_entries(
+        &self,
+        rt: &dyn RayCaster,
+        samples: &[Sample],
+        groups: &[&[(u64, u32)]],
+        values: &[FineCell],
+    ) -> Vec<Entry> {
+        let mut keyed: Vec<(u64, u32, u32)> = (1..LEVELS)
             .flat_map(|level| {
-                let cache = &*self;
                 groups
                     .iter()
                     .zip(values)
@@ -131,28 +161,71 @@ impl IrradianceCache {
                     .filter(move |(_, (_, v))| level <= v.natural + 1)
                     .map(move |(gi, (g, _))| {
                         let s = samples[g[0].1 as usize];
-                        (cache.key(s.0, s.1, level), gi as u32)
+                        (self.key(s.0, s.1, level), gi as u32, level)
                     })
             })
             .collect();
         keyed.par_sort_unstable();
-        let coarse = keyed.chunk_by(|a, b| a.0 == b.0).count();
-        let cells = groups.len() + coarse;
-        // Half full: 16 bytes per cell with 8-byte slots.
-        self.slots = vec![Slot::default(); (2 * cells).max(2)];
-        self.cells = cells;
-        for (g, v) in groups.iter().zip(values) {
-            self.insert(g[0].0, to_rgbe(v.value));
-        }
-        for group in keyed.chunk_by(|a, b| a.0 == b.0) {
-            let members = || group.iter().map(|&(_, gi)| values[gi as usize]);
-            let sparsest = members().map(|v| v.natural).max().unwrap_or(0);
-            let (sum, weight) = members()
-                .filter(|v| v.natural >= sparsest)
-                .fold((Vec3::ZERO, 0.0f32), |(s, w), v| {
-                    (s + v.value * v.weight, w + v.weight)
-                });
-            self.insert(group[0].0, to_rgbe(sum / weight.max(f32::MIN_POSITIVE)));
+        let cells: Vec<&[(u64, u32, u32)]> = keyed.chunk_by(|a, b| a.0 == b.0).collect();
+        cells
+            .par_iter()
+            .map(|group| {
+                let sparsest = group
+                    .iter()
+                    .map(|&(_, gi, _)| values[gi as usize].natural)
+                    .max()
+                    .unwrap_or(0);
+                let members: Vec<&FineCell> = group
+                    .iter()
+                    .map(|&(_, gi, _)| &values[gi as usize])
+                    .filter(|v| v.natural >= sparsest)
+                    .collect();
+                let rep = members
+                    .iter()
+                    .min_by_key(|v| samples[v.rep as usize].2)
+                    .copied()
+                    .unwrap_or(members[0]);
+                let (p, n, _) = samples[rep.rep as usize];
+                let (lo, side) = self.cube(p, group[0].2);
+                let mut hidden = false;
+                let (sum, weight) = members
+                    .iter()
+                    .filter(|v| {
+                        let seen = v.rep == rep.rep
+                            || walls::sees(rt, p, n, samples[v.rep as usize].0, self.lift);
+                        hidden |= !seen;
+                        seen
+                    })
+                    .fold((Vec3::ZERO, 0.0f32), |(s, w), v| {
+                        (s + v.value * v.weight, w + v.weight)
+                    });
+                let walled = hidden || walls::crossed(rt, (p, n), self.lift, lo, side);
+                Entry {
+                    key: group[0].0,
+                    rgbe: to_rgbe(sum / weight.max(f32::MIN_POSITIVE)),
+                    point: walled.then(|| walls::encode(p, lo, side)),
+                }
+            })
+            .collect()
+    }
+
+    /// Sizes the table and inserts the entries, a walled one's point in a
+    /// second slot: two slots a cell (16 bytes), so at most 0.67 full while
+    /// at most a third of the cells are walled (a tenth on the Cornell box);
+    /// beyond that the table grows to stay 2/3 full at most, so that a
+    /// probe chain stays short.
+    fn fill(&mut self, fine: &[Entry], coarse: &[Entry]) {
+        let entries = || fine.iter().chain(coarse);
+        self.cells = fine.len() + coarse.len();
+        self.walled = entries().filter(|e| e.point.is_some()).count();
+        let used = self.cells + self.walled;
+        let slots = (2 * self.cells).max(used + used.div_ceil(2)).max(2);
+        self.slots = vec![Slot::default(); slots];
+        for e in entries() {
+            self.insert(e.key, e.rgbe, e.point.is_some());
+            if let Some(code) = e.point {
+                self.insert(point_key(e.key), code, false);
+            }
         }
     }
 
@@ -167,11 +240,21 @@ impl IrradianceCache {
     }
 }
 
+/// A cell's entry in the table: its key, its irradiance (RGBE) and, for a
+/// walled cell, its representative's position ([`walls::encode`]).
+struct Entry {
+    key: u64,
+    rgbe: u32,
+    point: Option<u32>,
+}
+
 /// A finest cell's estimate, with what its kernel says of the sample
 /// density around it.
 #[derive(Clone, Copy)]
 struct FineCell {
     value: Vec3,
+    /// The sample whose estimate it holds.
+    rep: u32,
     /// `ceil(log2(s))` for samples `s^2` times sparser than
     /// [`SAMPLES_PER_CELL`] a cell (0 where they are at least that dense),
     /// within the levels: the level whose side matches the kernel's.
@@ -187,7 +270,7 @@ impl FineCell {
     /// The cell of side `cell` whose estimate is `e`, from the photons that
     /// are not samples (one in `stride` is one), over a kernel whose disc
     /// the sample sees on a surface by `share` ([`kernel_share`]).
-    fn new(e: Estimate, share: f32, cell: f32, stride: u32) -> Self {
+    fn new(e: Estimate, share: f32, cell: f32, stride: u32, rep: u32) -> Self {
         // Expected samples in the cell: the non-samples' density from the
         // kernel (`found` in `pi r^2`), over `stride - 1`, times the area.
         // The whole disc, not its share, as before the share: an edge cell
@@ -205,6 +288,7 @@ impl FineCell {
         let exists = -(-per_cell).exp_m1();
         FineCell {
             value: e.value / share,
+            rep,
             natural: level.min((LEVELS - 1) as f32) as u32,
             weight: 1.0 / exists.max(1e-6),
         }

@@ -112,12 +112,14 @@
 
 use super::estimate::Lookup;
 use crate::error::{Error, Result};
+use crate::raycast::RayCaster;
 use crate::rng::mix64;
 use glam::Vec3;
 
 mod build;
 mod sample_estimate;
 mod support;
+mod walls;
 
 /// Default: one irradiance sample per this many photons.
 pub const DEFAULT_STRIDE: u32 = 8;
@@ -169,11 +171,35 @@ impl CacheConfig {
     }
 }
 
-/// One slot: a tag of the cell's key (0 = empty) and the irradiance (RGBE).
+/// One slot: a tag of the cell's key (0 = empty; bit [`WALLED`] set on a
+/// walled cell's) and the irradiance (RGBE), or, under [`point_key`], a
+/// walled cell's representative position ([`walls::encode`]).
 #[derive(Clone, Copy, Debug, Default)]
 struct Slot {
     tag: u32,
-    rgbe: u32,
+    payload: u32,
+}
+
+/// The tag bit of a cell that a wall crosses ([`walls`]): a lookup reads it
+/// only if it sees the cell's representative point.
+const WALLED: u32 = 2;
+
+/// A key's tag, without the [`WALLED`] bit, never 0.
+fn tag_of(key: u64) -> u32 {
+    ((key >> 32) as u32 | 1) & !WALLED
+}
+
+/// The key of the slot that holds a walled cell's representative point.
+fn point_key(key: u64) -> u64 {
+    mix64(key ^ 0x5bd1_e995_c2b2_ae35)
+}
+
+/// A cell to read: a point in it, its level and its key.
+#[derive(Clone, Copy, Debug)]
+struct CellAt {
+    at: Vec3,
+    level: u32,
+    key: u64,
 }
 
 /// Irradiance in the cells of a hashed grid, read by one probe.
@@ -184,7 +210,12 @@ pub struct IrradianceCache {
     cell: f32,
     inv_cell: f32,
     cells: usize,
+    /// Cells that a wall crosses (each holds a second slot, its point).
+    walled: usize,
     samples: usize,
+    /// How far above a surface the lookups' segments run (the plane
+    /// tolerance), world units.
+    lift: f32,
     /// Seconds to build (normals, estimates, table).
     pub build_s: f64,
 }
@@ -239,13 +270,28 @@ fn from_rgbe(v: u32) -> Vec3 {
 }
 
 impl IrradianceCache {
-    /// The hashed key of the cell of `x` with normal `n` at `level` (side `h 2^level`).
-    fn key(&self, x: Vec3, n: Vec3, level: u32) -> u64 {
+    /// The integer coordinates of the cell of `x` at `level` (side `h 2^level`).
+    #[inline]
+    fn coords(&self, x: Vec3, level: u32) -> [i64; 3] {
         let g = (x - self.origin) * (self.inv_cell / (1u32 << level) as f32);
+        [cell_index(g.x), cell_index(g.y), cell_index(g.z)]
+    }
+
+    /// The hashed key of the cell of `x` with normal `n` at `level`.
+    #[inline]
+    fn key(&self, x: Vec3, n: Vec3, level: u32) -> u64 {
+        let coords = self.coords(x, level);
         // Keys wrap every 2^19 cells per axis: far more than any scene we cache.
-        let c = |v: f32| (cell_index(v) as u64) & 0x7_FFFF;
+        let c = |i: usize| (coords[i] as u64) & 0x7_FFFF;
         let meta = bucket(n) | ((level as u64) << 3);
-        mix64(c(g.x) | (c(g.y) << 19) | (c(g.z) << 38) | (meta << 57))
+        mix64(c(0) | (c(1) << 19) | (c(2) << 38) | (meta << 57))
+    }
+
+    /// The low corner and the side of the cube of the cell of `x` at `level`.
+    fn cube(&self, x: Vec3, level: u32) -> (Vec3, f32) {
+        let side = self.cell * (1u32 << level) as f32;
+        let [i, j, k] = self.coords(x, level).map(|i| i as f32);
+        (self.origin + Vec3::new(i, j, k) * side, side)
     }
 
     /// First slot of `key`'s probe chain (multiply-shift onto the table).
@@ -253,22 +299,23 @@ impl IrradianceCache {
         ((key as u32 as u64 * self.slots.len() as u64) >> 32) as usize
     }
 
-    fn insert(&mut self, key: u64, rgbe: u32) {
-        let tag = (key >> 32) as u32 | 1;
+    fn insert(&mut self, key: u64, payload: u32, walled: bool) {
+        let tag = tag_of(key) | if walled { WALLED } else { 0 };
         let mut i = self.home(key);
         while self.slots[i].tag != 0 {
             i = if i + 1 == self.slots.len() { 0 } else { i + 1 };
         }
-        self.slots[i] = Slot { tag, rgbe };
+        self.slots[i] = Slot { tag, payload };
     }
 
-    fn probe(&self, key: u64) -> Option<Vec3> {
-        let tag = (key >> 32) as u32 | 1;
+    /// The slot of `key`, if any.
+    fn probe(&self, key: u64) -> Option<Slot> {
+        let tag = tag_of(key);
         let mut i = self.home(key);
         loop {
-            let s = self.slots.get(i)?;
-            if s.tag == tag {
-                return Some(from_rgbe(s.rgbe));
+            let s = *self.slots.get(i)?;
+            if s.tag & !WALLED == tag {
+                return Some(s);
             }
             if s.tag == 0 {
                 return None;
@@ -277,9 +324,39 @@ impl IrradianceCache {
         }
     }
 
+    /// The irradiance of `cell`, read from `x` (normal `n`): none when the
+    /// cell is empty, or walled and `x` does not see its representative
+    /// point.
+    #[inline]
+    fn read(&self, rt: &dyn RayCaster, (x, n): (Vec3, Vec3), cell: &CellAt) -> Option<Vec3> {
+        let slot = self.probe(cell.key)?;
+        if slot.tag & WALLED != 0 && !self.sees_point(rt, (x, n), cell) {
+            return None;
+        }
+        Some(from_rgbe(slot.payload))
+    }
+
+    /// Whether `x` sees the representative point of the walled `cell`
+    /// (under 1 % of the reads on the Cornell box: kept out of line).
+    #[cold]
+    #[inline(never)]
+    fn sees_point(&self, rt: &dyn RayCaster, (x, n): (Vec3, Vec3), cell: &CellAt) -> bool {
+        let Some(point) = self.probe(point_key(cell.key)) else {
+            return false;
+        };
+        let (lo, side) = self.cube(cell.at, cell.level);
+        walls::sees(rt, x, n, walls::decode(point.payload, lo, side), self.lift)
+    }
+
     /// Cells holding a value.
     pub fn len(&self) -> usize {
         self.cells
+    }
+
+    /// Cells that a wall crosses: a lookup reads one only if it sees the
+    /// cell's representative point.
+    pub fn walled(&self) -> usize {
+        self.walled
     }
 
     /// True when the cache has no cell.
@@ -298,23 +375,38 @@ impl IrradianceCache {
     }
 
     /// Bytes per cached cell: the table's bytes over its cells (8-byte slots,
-    /// at most half full).
+    /// at most half full; a walled cell takes a second slot for its point).
     pub fn bytes_per_entry(&self) -> usize {
         (self.slots.len() * std::mem::size_of::<Slot>()).div_ceil(self.cells.max(1))
     }
 
     /// The irradiance at `x` (unit normal `n`): at the finest level that has
     /// one, the cell of `x` moved by the jitter `(u - 0.5) h 2^level` (`u` in
-    /// `[0, 1)^3`), else the cell of `x` itself.
-    pub fn irradiance(&self, x: Vec3, n: Vec3, u: [f32; 3]) -> Option<Vec3> {
+    /// `[0, 1)^3`), else the cell of `x` itself. A cell that a wall crosses
+    /// is read only if `x` sees its representative point (one segment cast
+    /// by `rt`, the caster of the scene the cache was built in).
+    pub fn irradiance(&self, x: Vec3, n: Vec3, u: [f32; 3], rt: &dyn RayCaster) -> Option<Vec3> {
         if self.cells == 0 {
             return None;
         }
         let j = (Vec3::from(u) - Vec3::splat(0.5)) * self.cell;
         (0..LEVELS).find_map(|level| {
-            let jl = j * (1u32 << level) as f32;
-            self.probe(self.key(x + jl, n, level))
-                .or_else(|| self.probe(self.key(x, n, level)))
+            let at = x + j * (1u32 << level) as f32;
+            let jittered = CellAt {
+                at,
+                level,
+                key: self.key(at, n, level),
+            };
+            self.read(rt, (x, n), &jittered).or_else(|| {
+                let own = CellAt {
+                    at: x,
+                    level,
+                    key: self.key(x, n, level),
+                };
+                (own.key != jittered.key)
+                    .then(|| self.read(rt, (x, n), &own))
+                    .flatten()
+            })
         })
     }
 }
