@@ -77,8 +77,11 @@ fn embree_tracer(name: &str, isa: Isa) -> Tracer<CommittedScene> {
 type Recorded = (Option<&'static str>, Isa, &'static str, [u64; 5]);
 
 /// An image not yet recorded on its vendor: the default render changed with
-/// the irradiance cache's kernel share (2026-12-05) and again with its
-/// sight (2026-12-06), recorded both times on an Intel Xeon only.
+/// the irradiance cache's kernel share (2026-12-05), again with its sight
+/// (2026-12-06) and with its walled cells (2026-12-06, a second session),
+/// recorded each time on an Intel Xeon only. The Xeon's SSE2 and AVX2
+/// Cornell box did not change with the walled cells; its other default
+/// renders did.
 const UNRECORDED: u64 = 0;
 const RECORDED: &[Recorded] = &[
     (
@@ -146,7 +149,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Sse2,
         "cornell-glass",
         [
-            0x400c_d7e1_d6e8_dd94, // was 0x37df_8e94_44bd_ab22, before the cache's sight
+            0xa96b_bc73_9f4b_a2b1, // was 0x400c_d7e1_d6e8_dd94, before the walled cells
             0xe19d_978e_0c1b_28f6,
             0xd178_adc3_505a_1a63,
             0x4422_8fbf_cd9a_27b2,
@@ -170,7 +173,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx2,
         "cornell-glass",
         [
-            0x46d0_68e2_6c0b_a48b, // was 0x04f5_8208_ea48_ecc4, before the cache's sight
+            0x6ee9_8703_1d08_ae75, // was 0x46d0_68e2_6c0b_a48b, before the walled cells
             0x9cfc_00b6_6ff6_7aef,
             0x1ebf_4aeb_3fdd_6fee,
             0xefdb_fecd_2b67_4307,
@@ -182,7 +185,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx512,
         "cornell",
         [
-            0x400b_4d4e_21b3_f0bf, // was 0x7072_2559_0734_5605, before the cache's sight
+            0x0376_0c26_1309_540e, // was 0x400b_4d4e_21b3_f0bf, before the walled cells
             0xfef1_c0e4_f37c_ce91,
             0x0605_42eb_3124_8c84,
             0xb30d_e337_1801_ec7b,
@@ -194,7 +197,7 @@ const RECORDED: &[Recorded] = &[
         Isa::Avx512,
         "cornell-glass",
         [
-            0x9e0d_f930_cdfb_c314, // was 0xe10d_de11_6d78_8135, before the cache's sight
+            0x5d16_9ee2_1bcf_10a7, // was 0x9e0d_f930_cdfb_c314, before the walled cells
             0x133e_be17_baba_c39b,
             0xbf96_9617_d9e1_7b6d,
             0x9f14_6f8a_e7f9_9e7a,
