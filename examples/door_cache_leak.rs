@@ -1,10 +1,12 @@
 //! How far the irradiance cache's lookups read across `door`'s partition
-//! (docs/rendering.md, "The sample's sight"): photons of power 1 spread
+//! (docs/rendering.md, "Cells a wall crosses"): photons of power 1 spread
 //! evenly over both rooms' floors, the lit room (x > 415) 20 times as dense
 //! as the camera's (x < 400); the cache (k = 100, stride 8) read at points
 //! of the camera's room 0.05 to 1 kernel radius from the partition and over
 //! 50 from the doorway, 4 jittered lookups each. Prints, per distance, the
-//! cache's mean over the camera room's exact irradiance.
+//! cache's mean over the camera room's exact irradiance: 9.0, 2.0, 1.14 and
+//! 1.02 at 0.05, 0.25, 0.5 and 1 radius before the cache's walled cells,
+//! 1.02, 1.00, 1.01 and 1.02 with them.
 //!
 //! `cargo run --release --example door_cache_leak`
 

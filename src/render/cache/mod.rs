@@ -48,10 +48,20 @@
 //!   side's cells onto the dark side: on `door` the camera's room read x 4.8
 //!   too bright in the image, x 9 on its right wall, which runs on through
 //!   the lit room (`render_cache.rs`, `cache_keeps_the_dark_room_dark_on_door`).
-//! - **Storage**: open addressing, half full: each slot is 8 bytes, a 32-bit
-//!   tag of the cell's key and its irradiance in shared-exponent RGB (Ward's
-//!   RGBE, 1/256 of the largest channel): **16 bytes per cached cell**
-//!   counting the empty slots; cells of all levels ~ 1.3 x the finest's.
+//! - **Walls** ([`walls`]): a cell whose representative (a finest cell's
+//!   sample, a coarse cell's member with the least coin) sees a face inside
+//!   its cube with surface behind it, or does not see a member it would
+//!   average, is *walled*: it averages only the members its representative
+//!   sees and keeps the representative's position. A thin wall under a
+//!   cell (`door`'s partition under a coarse one) otherwise let a lookup
+//!   read the next room's light.
+//! - **Storage**: open addressing: each slot is 8 bytes, a 32-bit tag of
+//!   the cell's key (one bit of it the walled flag) and its irradiance in
+//!   shared-exponent RGB (Ward's RGBE, 1/256 of the largest channel); a
+//!   walled cell's position takes a second slot. Two slots a cell: **16
+//!   bytes per cached cell** counting the empty slots, the table at most
+//!   2/3 full while at most a third of the cells are walled (1 % on the
+//!   Cornell box, 3 % on `door`); cells of all levels ~ 1.3 x the finest's.
 //!
 //! # Lookup
 //! The cell of `x + j` for a jitter `j` uniform in the cube `[-h/2, h/2]^3`
@@ -60,15 +70,18 @@
 //! tent filter of width `2h` in expectation, so no grid shows in an image; a
 //! jitter that lands in an empty cell (past a surface's edge) retries
 //! without it, then at the coarser levels; a miss at every level falls back
-//! to the k-nearest estimate.
+//! to the k-nearest estimate. A walled cell is read only if the lookup's
+//! point sees the cell's representative (one segment); else the lookup
+//! goes on as on an empty cell.
 //!
 //! # Bias
 //! On top of the k-nearest estimate's own blur over its radius `r`, the
 //! cells blur by a tent of width `2h = 2 r` at the defaults, and a cell cut by
 //! an edge reads the mean of its part. All of it scales with `r ~ sqrt(k / N)`
 //! and vanishes as the photon count `N` grows; a tag collision (two cells
-//! with one 32-bit tag on one probe chain, odds ~ cells / 2^32 per lookup)
-//! reads a wrong cell.
+//! with one tag on one probe chain: 30 bits of the key's hash, one bit of
+//! the tag forced to 1 and one the walled flag, odds ~ cells / 2^30 per
+//! lookup) reads a wrong cell.
 //!
 //! The boundary bias of a disc that runs past a surface's edge is removed
 //! by the kernel share: it scaled with `r` too, and was most of the
@@ -99,13 +112,13 @@
 //! room's photons through the 15 cm partition); on the Cornell box, where
 //! the finest cells serve, it matches that estimate within its noise.
 //!
-//! A lookup can still read across a wall thinner than its cell: cells are
-//! keyed by their samples' positions, and a coarse cell that spans `door`'s
-//! 15 cm partition and holds only the lit room's cells is read from the
-//! camera's room at the lit room's light (9 times the camera room's at
-//! 0.05 kernel radii from the partition, with the lit room 20 times as
-//! bright: `examples/door_cache_leak.rs`). The cell's own estimate does
-//! not cross the wall.
+//! A lookup read across a wall thinner than its cell before the walled
+//! cells: a coarse cell that spanned `door`'s 15 cm partition and held only
+//! the lit room's cells was read from the camera's room at the lit room's
+//! light (9 times the camera room's at 0.05 kernel radii from the
+//! partition, with the lit room 20 times as bright; 1.02 times since:
+//! `examples/door_cache_leak.rs`). A wall that clips only a corner of a
+//! cube, between the rays that look for walls, can still be missed.
 //!
 //! What remains in a finest cell is that its one point is a photon, more
 //! likely in its bright part: `|grad E|^2 h^2 / (12 E)`, second order in `h`.
