@@ -212,7 +212,11 @@ pub fn interpolate(c: &[(f64, f64)], x: f64) -> Option<f64> {
         let far = c.iter().find(|p| p.0 >= 2.0 * first.0).unwrap_or(last);
         (*first, *far)
     } else if x > last.0 {
-        let near = c.iter().rev().find(|p| p.0 <= 0.5 * last.0).unwrap_or(first);
+        let near = c
+            .iter()
+            .rev()
+            .find(|p| p.0 <= 0.5 * last.0)
+            .unwrap_or(first);
         (*near, *last)
     } else {
         let i = c

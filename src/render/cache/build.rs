@@ -352,3 +352,68 @@ fn surface_normal(rt: &dyn RayCaster, p: Vec3, dir: Vec3, diagonal: f32) -> Opti
     let n = if ng.dot(dir) > 0.0 { -ng } else { ng };
     (n != Vec3::ZERO).then_some(n)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::mix64;
+
+    /// An empty cache of cell side 1 to fill.
+    fn empty() -> IrradianceCache {
+        IrradianceCache {
+            slots: Vec::new(),
+            origin: Vec3::ZERO,
+            cell: 1.0,
+            inv_cell: 1.0,
+            cells: 0,
+            walled: 0,
+            samples: 0,
+            lift: 1e-3,
+            build_s: 0.0,
+        }
+    }
+
+    /// The table keeps two slots a cell while at most a third are walled,
+    /// grows past that to stay at most 2/3 full, and every entry, its point
+    /// included, reads back; a key it does not hold misses (the probe
+    /// chain ends at an empty slot).
+    #[test]
+    fn the_table_stays_two_thirds_full_and_reads_back() {
+        for (cells, walled_every) in [(3000usize, 0usize), (3000, 3), (3000, 1), (1, 1)] {
+            let entries: Vec<Entry> = (0..cells)
+                .map(|i| Entry {
+                    key: mix64(i as u64 + 1),
+                    rgbe: i as u32 + 1,
+                    point: (walled_every > 0 && i % walled_every == 0).then_some(i as u32 * 7),
+                })
+                .collect();
+            let mut cache = empty();
+            cache.fill(&entries, &[]);
+            let used = cache.cells + cache.walled;
+            assert!(
+                3 * used <= 2 * cache.slots.len(),
+                "{used} in {}",
+                cache.slots.len()
+            );
+            if 3 * cache.walled <= cache.cells {
+                assert_eq!(
+                    cache.bytes_per_entry(),
+                    16,
+                    "{cells} cells, {}",
+                    cache.walled
+                );
+            }
+            for e in &entries {
+                let slot = cache.probe(e.key).unwrap();
+                assert_eq!(slot.payload, e.rgbe);
+                assert_eq!(slot.tag & super::super::WALLED != 0, e.point.is_some());
+                if let Some(code) = e.point {
+                    assert_eq!(cache.probe(point_key(e.key)).unwrap().payload, code);
+                }
+            }
+            for i in 0..1000u64 {
+                assert!(cache.probe(mix64((i + 2) << 40)).is_none());
+            }
+        }
+    }
+}
