@@ -48,7 +48,7 @@
 //!   side's cells onto the dark side: on `door` the camera's room read x 4.8
 //!   too bright in the image, x 9 on its right wall, which runs on through
 //!   the lit room (`render_cache.rs`, `cache_keeps_the_dark_room_dark_on_door`).
-//! - **Walls** ([`walls`]): a cell whose representative (a finest cell's
+//! - **Walls** (`walls`): a cell whose representative (a finest cell's
 //!   sample, a coarse cell's member with the least coin) sees a face inside
 //!   its cube with surface behind it, or does not see a member it would
 //!   average, is *walled*: it averages only the members its representative
