@@ -5,17 +5,14 @@
 //! **Equal time / memory.** Level `i` is the geometric mean over the modes of
 //! their mean time (or map bytes) at budget `i`. Each mode's mean indirect
 //! error (and points error) is interpolated log-log along its own curve at
-//! that level; up to a factor [`MAX_EXTRAPOLATION`] beyond its measured range
-//! the curve is extended with the slope from its end to the first point at
-//! least twice as far along (not its end segment, which two budgets close
-//! in time made as steep as 18 decades a decade on `door`: 646 where the
-//! measured errors were 3.9 and 15.8), further out the mode has no value
-//! there.
-//! The curve is the mode's frontier ([`frontier`]): a budget that took
-//! longer than a larger one and erred more (timing noise at the smallest
-//! budgets) is left out, since extending the steep segment between the two
-//! read an error far below any measured one (0.18 where the two measured
-//! 3.9 and 15.8, on `door`).
+//! that level. The curve is the mode's frontier ([`frontier`]): a budget
+//! that took longer than a larger one and erred more (timing noise at the
+//! smallest budgets) is left out. Up to a factor [`MAX_EXTRAPOLATION`]
+//! beyond its measured range the curve is extended with the slope from its
+//! end to the first point at least twice as far along; further out the
+//! mode has no value there. Both guard against two budgets close in time:
+//! on `door`, whose density control measured 3.9 and 15.8 there, extending
+//! the segment between them read 0.18 in one run and 646 in the next.
 
 // `!(x > 0.0)` is deliberate here: it rejects NaN with the non-positive values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

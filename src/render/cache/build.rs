@@ -187,18 +187,18 @@ impl IrradianceCache {
                     .unwrap_or(members[0]);
                 let (p, n, _) = samples[rep.rep as usize];
                 let (lo, side) = self.cube(p, group[0].2);
-                let mut hidden = false;
-                let (sum, weight) = members
+                let seen: Vec<&FineCell> = members
                     .iter()
+                    .copied()
                     .filter(|v| {
-                        let seen = v.rep == rep.rep
-                            || walls::sees(rt, p, n, samples[v.rep as usize].0, self.lift);
-                        hidden |= !seen;
-                        seen
+                        v.rep == rep.rep
+                            || walls::sees(rt, p, n, samples[v.rep as usize].0, self.lift)
                     })
-                    .fold((Vec3::ZERO, 0.0f32), |(s, w), v| {
-                        (s + v.value * v.weight, w + v.weight)
-                    });
+                    .collect();
+                let (sum, weight) = seen.iter().fold((Vec3::ZERO, 0.0f32), |(s, w), v| {
+                    (s + v.value * v.weight, w + v.weight)
+                });
+                let hidden = seen.len() < members.len();
                 let walled = hidden || walls::crossed(rt, (p, n), self.lift, lo, side);
                 Entry {
                     key: group[0].0,

@@ -300,6 +300,16 @@ impl IrradianceCache {
         mix64(c(0) | (c(1) << 19) | (c(2) << 38) | (meta << 57))
     }
 
+    /// The cell of `at` with normal `n` at `level`, to read.
+    #[inline]
+    fn cell_at(&self, at: Vec3, n: Vec3, level: u32) -> CellAt {
+        CellAt {
+            at,
+            level,
+            key: self.key(at, n, level),
+        }
+    }
+
     /// The low corner and the side of the cube of the cell of `x` at `level`.
     fn cube(&self, x: Vec3, level: u32) -> (Vec3, f32) {
         let side = self.cell * (1u32 << level) as f32;
@@ -404,18 +414,9 @@ impl IrradianceCache {
         }
         let j = (Vec3::from(u) - Vec3::splat(0.5)) * self.cell;
         (0..LEVELS).find_map(|level| {
-            let at = x + j * (1u32 << level) as f32;
-            let jittered = CellAt {
-                at,
-                level,
-                key: self.key(at, n, level),
-            };
+            let jittered = self.cell_at(x + j * (1u32 << level) as f32, n, level);
             self.read(rt, (x, n), &jittered).or_else(|| {
-                let own = CellAt {
-                    at: x,
-                    level,
-                    key: self.key(x, n, level),
-                };
+                let own = self.cell_at(x, n, level);
                 (own.key != jittered.key)
                     .then(|| self.read(rt, (x, n), &own))
                     .flatten()

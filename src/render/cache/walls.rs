@@ -30,8 +30,8 @@ const STEPS: f32 = 1024.0;
 
 /// Whether `p` (unit normal `n`), lifted `lift` above its surface, sees a
 /// face along its tangent plane before leaving the cube of corner `lo` and
-/// side `side`, with surface facing the same way behind it, inside the
-/// cube: 16 rays, each stopped at the cube's boundary, and behind a hit
+/// side `side`, with surface along the plane behind it, inside the cube
+/// ([`surface_below`]): 16 rays, each stopped at the cube's boundary, and behind a hit
 /// [`PROBES`] short rays down through the plane. A box's outer wall, with
 /// nothing behind it, does not wall a cell: no lookup comes from there.
 pub(super) fn crossed(
