@@ -12,8 +12,9 @@ use adaptive_pm::engine::{CausticBudget, CausticReport, Mode, TraceConfig, Trace
 use adaptive_pm::output::refuse_overwrite;
 use adaptive_pm::photon_file::read_render_maps;
 use adaptive_pm::render::{
-    cache::DEFAULT_STRIDE, check_output_path, tile_rows, CheckedRender, GatherAllocation, Image,
-    Integrator, RenderConfig, RenderMaps, RenderStats, ToneMap, View, DEFAULT_GATHER, DEFAULT_K,
+    cache::DEFAULT_STRIDE, check_output_path, tile_rows, CheckedRender, GatherAllocation,
+    GatherDirections, Image, Integrator, RenderConfig, RenderMaps, RenderStats, ToneMap, View,
+    DEFAULT_GATHER, DEFAULT_K,
 };
 use adaptive_pm::scene::Scene;
 use anyhow::Context;
@@ -70,6 +71,11 @@ pub struct RenderArgs {
     /// average, more where a pilot measured more gather noise) or uniform.
     #[arg(long, default_value = "variance")]
     pub gather_allocation: GatherAllocation,
+    /// Where the gather's directions come from at a diffuse surface: guided
+    /// (the irradiance cache's histogram of where the indirect photons came
+    /// from, half and half with the cosine) or brdf (the cosine alone).
+    #[arg(long, default_value = "guided")]
+    pub gather_directions: GatherDirections,
     /// Light samples (shadow rays) per camera sample.
     #[arg(long, default_value_t = 1)]
     pub light_samples: u32,
@@ -253,6 +259,7 @@ fn render_config(args: &RenderArgs) -> anyhow::Result<CheckedRender> {
     cfg.spp = first_spp(args.spp);
     cfg.final_gather = args.final_gather;
     cfg.gather_allocation = args.gather_allocation;
+    cfg.gather_directions = args.gather_directions;
     cfg.light_samples = args.light_samples;
     cfg.cache_stride = args.cache_stride;
     cfg.k = args.k;
@@ -362,6 +369,7 @@ fn report(args: &RenderArgs, cfg: &RenderConfig, image: &Image, run: &RunReport)
                 "noise_target_reached": spp.noise.map(|n| n.1),
                 "final_gather": args.final_gather,
                 "gather_allocation": args.gather_allocation.name(),
+                "gather_directions": args.gather_directions.name(),
                 "mean_gather": stats.mean_gather,
                 "gather_plan_s": stats.gather_plan_s,
                 "light_samples": args.light_samples,

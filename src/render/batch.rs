@@ -119,9 +119,10 @@ impl Ctx<'_> {
         b.owners.clear();
         for (k, s) in b.surfaces.iter().enumerate() {
             let Some(s) = s else { continue };
+            let guide = self.guide_at(s);
             for j in 0..g {
                 let u = px.get_2d(dim::GATHER, b.samples[k] * g + j, n);
-                if let Some((weight, ray)) = self.gather_ray(s, u) {
+                if let Some((weight, ray)) = self.gather_ray_with(s, u, guide.as_ref()) {
                     b.rays.push(ray);
                     b.owners.push((k, weight));
                 }
@@ -238,6 +239,7 @@ mod tests {
                 eps: ray_epsilon(&scene),
                 show_emitters,
                 reads: None,
+                guided: true,
             };
             assert!(ctx.batches());
             let mut sc = SampleScratch::new(lookup.k);

@@ -69,6 +69,42 @@ impl GatherAllocation {
     }
 }
 
+/// Where the final gather's directions come from at a diffuse surface.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GatherDirections {
+    /// The BRDF's sampling (the cosine).
+    Brdf,
+    /// The irradiance cache's guide: a histogram of the directions the
+    /// indirect photons came from there, mixed half and half with the
+    /// cosine ([`Guide`](super::cache::Guide)). Elsewhere, the BRDF's.
+    #[default]
+    Guided,
+}
+
+impl GatherDirections {
+    /// The name the command line takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            GatherDirections::Brdf => "brdf",
+            GatherDirections::Guided => "guided",
+        }
+    }
+}
+
+impl std::str::FromStr for GatherDirections {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s {
+            "brdf" => Ok(GatherDirections::Brdf),
+            "guided" => Ok(GatherDirections::Guided),
+            _ => Err(crate::Error::param(
+                "gather directions",
+                format!("expected guided or brdf, got `{s}`"),
+            )),
+        }
+    }
+}
+
 impl std::str::FromStr for GatherAllocation {
     type Err = crate::Error;
     fn from_str(s: &str) -> crate::Result<Self> {
@@ -197,9 +233,10 @@ fn pilot_pixel(
         return Spread::default();
     };
     let mut c = [0.0f64; PILOT_GATHER as usize];
+    let guide = ctx.guide_at(&s);
     for cj in &mut c {
         let u = rng.next_2d();
-        if let Some((weight, ray)) = ctx.gather_ray(&s, u) {
+        if let Some((weight, ray)) = ctx.gather_ray_with(&s, u, guide.as_ref()) {
             let mut emitted = Vec3::ZERO;
             if let Some(y) = ctx.trace(ray, u32::MAX, rng, &mut emitted) {
                 let l = weight * y.throughput * ctx.cached_radiance(maps, &y, rng, sc);

@@ -87,6 +87,7 @@ impl<'a> CameraWalk<'a> {
             eps: ray_epsilon(scene),
             show_emitters: false,
             reads: None,
+            guided: false,
         };
         CameraWalk {
             ctx,

@@ -3,7 +3,7 @@
 //! points ([`super::sampler`]). The image loop is in [`super::film`].
 
 use super::batch::Batch;
-use super::cache::IrradianceCache;
+use super::cache::{Guide, IrradianceCache};
 use super::direct::LightSampler;
 use super::estimate::{radiance_estimate, Lookup};
 use super::reads::{MapReads, RowReads};
@@ -39,6 +39,9 @@ pub(super) struct Ctx<'a> {
     pub(super) show_emitters: bool,
     /// Marks of the photons the lookups return, when asked for.
     pub(super) reads: Option<&'a MapReads<'a>>,
+    /// Whether a diffuse gather draws its directions from the cache's
+    /// guides ([`IrradianceCache::guide`]).
+    pub(super) guided: bool,
 }
 /// One lookup in this many is timed, its time counted this many times: a
 /// clock read per lookup cost 3.5 % of a render (`__vdso_clock_gettime` in
@@ -268,9 +271,10 @@ impl<'a> Ctx<'a> {
     ) -> Vec3 {
         let mut sum = Vec3::ZERO;
         let n = self.spp * g;
+        let guide = self.guide_at(s);
         for j in 0..g {
             let u = px.get_2d(dim::GATHER, sample * g + j, n);
-            let Some((weight, ray)) = self.gather_ray(s, u) else {
+            let Some((weight, ray)) = self.gather_ray_with(s, u, guide.as_ref()) else {
                 continue;
             };
             // Emission straight from a light was counted by light sampling,
@@ -295,6 +299,39 @@ impl<'a> Ctx<'a> {
             return None;
         }
         Some((bs.weight, Ray::new(s.position + s.normal * self.eps, dir)))
+    }
+
+    /// The guide a gather from `s` draws its directions from: the cache's
+    /// at a diffuse surface, when the render is guided.
+    #[inline]
+    pub(super) fn guide_at(&self, s: &SurfaceHit) -> Option<Guide> {
+        match (&s.brdf, self.cache) {
+            (Brdf::Lambert(_), Some(c)) if self.guided => c.guide(s.position, s.normal, s.shading),
+            _ => None,
+        }
+    }
+
+    /// [`Self::gather_ray`], its direction drawn from `guide` when there is
+    /// one (a diffuse `s`): the weight is the albedo over the guide's
+    /// density relative to the cosine's ([`Guide::sample`]).
+    #[inline]
+    pub(super) fn gather_ray_with(
+        &self,
+        s: &SurfaceHit,
+        u: [f32; 2],
+        guide: Option<&Guide>,
+    ) -> Option<(Vec3, Ray)> {
+        let (Some(g), Brdf::Lambert(l)) = (guide, &s.brdf) else {
+            return self.gather_ray(s, u);
+        };
+        let (dir, density) = g.sample(u);
+        if dir.dot(s.normal) <= 0.0 || s.wo.dot(s.shading) <= 0.0 {
+            return None;
+        }
+        Some((
+            l.albedo / density,
+            Ray::new(s.position + s.normal * self.eps, dir),
+        ))
     }
 
     /// Direct light at `s`: `light_samples` stratified light samples.

@@ -92,6 +92,8 @@ mod camera;
 pub mod direct;
 pub mod estimate;
 mod film;
+#[cfg(test)]
+mod gather_guide_tests;
 mod gather_plan;
 pub mod image;
 pub(crate) mod importance_walk;
@@ -110,7 +112,7 @@ pub use cache::{CacheConfig, IrradianceCache};
 pub use camera::CameraRays;
 pub use direct::LightSampler;
 pub use estimate::{irradiance_estimate, radiance_estimate, Estimate, Lookup};
-pub use gather_plan::{GatherAllocation, GatherPlan};
+pub use gather_plan::{GatherAllocation, GatherDirections, GatherPlan};
 #[cfg(feature = "image-io")]
 #[cfg_attr(docsrs, doc(cfg(feature = "image-io")))]
 pub use image::ExrFile;
@@ -236,6 +238,8 @@ pub struct RenderConfig {
     pub final_gather: u32,
     /// How the gather's rays are spread over the pixels.
     pub gather_allocation: GatherAllocation,
+    /// Where the gather's directions come from at a diffuse surface.
+    pub gather_directions: GatherDirections,
     /// Light samples (shadow rays) per camera sample.
     pub light_samples: u32,
     /// The irradiance cache the gather reads: one entry per `cache_stride`
@@ -278,6 +282,7 @@ impl RenderConfig {
             spp: 1,
             final_gather: DEFAULT_GATHER,
             gather_allocation: GatherAllocation::default(),
+            gather_directions: GatherDirections::default(),
             light_samples: 1,
             cache_stride: cache::DEFAULT_STRIDE,
             k: DEFAULT_K,

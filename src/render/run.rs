@@ -7,7 +7,7 @@ use super::camera::CameraRays;
 use super::direct::LightSampler;
 use super::estimate::Lookup;
 use super::film::{self, PixelEstimator, Sample};
-use super::gather_plan::{self, GatherPlan};
+use super::gather_plan::{self, GatherDirections, GatherPlan};
 use super::integrator::{Ctx, SampleScratch};
 use super::path_render::light_pixels;
 use super::progressive::{render_to_noise, NoiseTarget, Progressive, Round};
@@ -366,6 +366,7 @@ fn context<'a>(
         eps: ray_epsilon(scene),
         show_emitters: cfg.show_emitters,
         reads,
+        guided: cfg.gather_directions == GatherDirections::Guided,
     }
 }
 

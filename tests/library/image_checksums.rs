@@ -12,7 +12,9 @@ use adaptive_pm::embree::{CommittedScene, Device, EmbreeScene};
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::isa::Isa;
 use adaptive_pm::raycast::RayCaster;
-use adaptive_pm::render::{render, render_path, Image, PathPart, RenderConfig, RenderMaps, View};
+use adaptive_pm::render::{
+    render, render_path, GatherDirections, Image, PathPart, RenderConfig, RenderMaps, View,
+};
 use adaptive_pm::scene::{PreparedScene, Scene};
 
 /// FNV-1a over the pixels' bits.
@@ -45,6 +47,11 @@ fn images<C: RayCaster>(tracer: &Tracer<C>) -> [Image; 5] {
     // images are the code's at fixed settings, and only a machine of each
     // vendor can record its own.
     cfg.final_gather = 1;
+    // Likewise BRDF-sampled gathers, the default before the cache's guide
+    // (2026-12-06, a third session): the guide's images are checked
+    // against these in expectation (`gather_guide.rs`) and are the same on
+    // any thread count (`render.rs`).
+    cfg.gather_directions = GatherDirections::Brdf;
     let maps = maps(tracer);
     let full = render(prepared, Some(&maps), &cfg).unwrap();
     cfg.final_gather = 0;

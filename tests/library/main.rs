@@ -25,6 +25,7 @@ mod door_scene;
 mod embree_wrapper;
 mod engine;
 mod fixtures;
+mod gather_guide;
 mod gather_plan;
 mod glass_transport;
 mod gltf_alpha_mask;

@@ -6,7 +6,7 @@
 use crate::cli::common::{open_scene, AssetRootArgs, EmbreeArgs, ThreadArgs};
 use adaptive_pm::engine::{CausticBudget, Mode};
 use adaptive_pm::experiments::render_study::{run_direct_study, run_study, StudyConfig};
-use adaptive_pm::render::{GatherAllocation, RenderConfig};
+use adaptive_pm::render::{GatherAllocation, GatherDirections, RenderConfig};
 use serde_json::json;
 
 /// Arguments of `bench render`.
@@ -58,6 +58,10 @@ pub struct RenderBenchArgs {
     /// How the photon render spreads its gather rays: variance or uniform.
     #[arg(long, default_value = "variance")]
     pub gather_allocation: GatherAllocation,
+    /// Where the photon render's gather directions come from at a diffuse
+    /// surface: guided (the cache's guide) or brdf.
+    #[arg(long, default_value = "guided")]
+    pub gather_directions: GatherDirections,
     /// Photons per radiance estimate of the photon render (and its cache).
     #[arg(long, default_value_t = RenderConfig::new(1, 1).k)]
     pub k: usize,
@@ -89,6 +93,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
     render.light_samples = args.light_samples;
     render.final_gather = args.final_gather;
     render.gather_allocation = args.gather_allocation;
+    render.gather_directions = args.gather_directions;
     render.k = args.k;
     render.check()?;
     let cfg = StudyConfig {
@@ -127,6 +132,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
             "light_samples": args.light_samples,
             "final_gather": args.final_gather, "k": args.k,
             "gather_allocation": args.gather_allocation.name(),
+            "gather_directions": args.gather_directions.name(),
             "result": result, "direct": direct,
         }))?
     );

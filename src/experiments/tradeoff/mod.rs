@@ -169,13 +169,15 @@ impl TradeoffConfig {
     /// A render of this study's size: emitters hidden, one gather ray per
     /// camera sample (the study's spp and reference were sized for one, and
     /// the studies in `docs/tradeoff/` were measured with it; the render's
-    /// default is two).
+    /// default is two), drawn by the BRDF (the studies predate the gather's
+    /// guide, the render's default now).
     pub fn render_config(&self, spp: u32, seed: u64) -> crate::render::RenderConfig {
         let mut c = crate::render::RenderConfig::new(self.width, self.height);
         c.spp = spp;
         c.seed = seed;
         c.show_emitters = false;
         c.final_gather = 1;
+        c.gather_directions = crate::render::GatherDirections::Brdf;
         c
     }
 }

@@ -2,10 +2,11 @@
 //! cell, the coarse levels (see the parent module for the design and its
 //! bias).
 
+use super::guide::{self, GuideTable, Histogram, PowerPerBin};
 use super::sample_estimate::{Sample, SampleEstimate, SampleEstimator};
 use super::{
-    point_key, to_rgbe, walls, CacheConfig, IrradianceCache, Slot, LEVELS, PLANE_TOLERANCE,
-    SAMPLES_PER_CELL,
+    point_key, to_rgbe, walls, CacheConfig, IrradianceCache, Slot, GUIDE_LEVEL, LEVELS,
+    PLANE_TOLERANCE, SAMPLES_PER_CELL,
 };
 use crate::error::Result;
 use crate::photon_map::{Neighbor, PhotonMap};
@@ -86,6 +87,7 @@ impl IrradianceCache {
             walled: 0,
             samples: samples.len(),
             lift: PLANE_TOLERANCE * diagonal,
+            guides: GuideTable::default(),
             build_s: 0.0,
         };
         // Finest cells: one k-nearest estimate each, at the sample `pick`
@@ -104,7 +106,8 @@ impl IrradianceCache {
                 let sample = samples[rep as usize];
                 let e = estimate(sc, sample);
                 let share = estimator.share(sample.0, &e);
-                FineCell::new(e.estimate, share, cell, cfg.stride, rep)
+                let guide = indirect_power(full, sample.1, &sc.neighbors);
+                FineCell::new(e.estimate, share, cell, cfg.stride, rep, guide)
             })
             .collect();
         let fine_entries: Vec<Entry> = groups
@@ -114,6 +117,7 @@ impl IrradianceCache {
             .collect();
         let coarse = cache.coarse_entries(rt, &samples, &groups, &values);
         cache.fill(&fine_entries, &coarse);
+        cache.guides = cache.guide_table(&samples, &groups, &values);
         cache.build_s = t.elapsed().as_secs_f64();
         Ok(cache)
     }
@@ -209,6 +213,39 @@ impl IrradianceCache {
             .collect()
     }
 
+    /// The gather guides: the finest cells' power per bin summed over each
+    /// cell of [`GUIDE_LEVEL`] (a finest cell's hundred photons are too few
+    /// for a histogram that helps), each quantised.
+    fn guide_table(
+        &self,
+        samples: &[Sample],
+        groups: &[&[(u64, u32)]],
+        values: &[FineCell],
+    ) -> GuideTable {
+        let mut keyed: Vec<(u64, u32)> = groups
+            .iter()
+            .enumerate()
+            .map(|(gi, g)| {
+                let (p, n, _) = samples[g[0].1 as usize];
+                (self.key(p, n, GUIDE_LEVEL), gi as u32)
+            })
+            .collect();
+        keyed.sort_unstable();
+        let entries: Vec<(u64, Histogram)> = keyed
+            .chunk_by(|a, b| a.0 == b.0)
+            .filter_map(|cell| {
+                let mut power = [0.0f32; guide::SIDE * guide::SIDE];
+                for &(_, gi) in cell {
+                    for (p, q) in power.iter_mut().zip(&values[gi as usize].guide) {
+                        *p += q;
+                    }
+                }
+                Some((cell[0].0, Histogram::of(&power)?))
+            })
+            .collect();
+        GuideTable::new(&entries)
+    }
+
     /// Sizes the table and inserts the entries, a walled one's point in a
     /// second slot: two slots a cell (16 bytes), so at most 0.67 full while
     /// at most a third of the cells are walled (a tenth on the Cornell box);
@@ -264,13 +301,16 @@ struct FineCell {
     /// gives its part of the surface, since a sparse cell exists in
     /// proportion to its photons, more likely in the bright part.
     weight: f32,
+    /// The gather guide's power per bin: where its indirect photons came
+    /// from.
+    guide: PowerPerBin,
 }
 
 impl FineCell {
     /// The cell of side `cell` whose estimate is `e`, from the photons that
     /// are not samples (one in `stride` is one), over a kernel whose disc
     /// the sample sees on a surface by `share` ([`kernel_share`]).
-    fn new(e: Estimate, share: f32, cell: f32, stride: u32, rep: u32) -> Self {
+    fn new(e: Estimate, share: f32, cell: f32, stride: u32, rep: u32, guide: PowerPerBin) -> Self {
         // Expected samples in the cell: the non-samples' density from the
         // kernel (`found` in `pi r^2`), over `stride - 1`, times the area.
         // The whole disc, not its share, as before the share: an edge cell
@@ -291,6 +331,7 @@ impl FineCell {
             rep,
             natural: level.min((LEVELS - 1) as f32) as u32,
             weight: 1.0 / exists.max(1e-6),
+            guide,
         }
     }
 }
@@ -339,6 +380,22 @@ where
         .max(f32::MIN_POSITIVE)
 }
 
+/// The gather guide's power per bin of `neighbors` (a finest cell's
+/// estimate's photons, at a sample of normal `n`): the photons that bounced
+/// at least once and are not caustic ones (the light's own emission and
+/// light through mirrors and glass are not the gather's).
+fn indirect_power(full: &PhotonMap, n: Vec3, neighbors: &[Neighbor]) -> PowerPerBin {
+    let frame = guide::frame(n, n);
+    let indirect = neighbors.iter().filter_map(|nb| {
+        let c = full.compact(nb.index);
+        (c.depth() >= 1 && !c.is_caustic()).then(|| {
+            let p = full.photon(nb.index);
+            (p.direction, p.power)
+        })
+    });
+    guide::power_per_bin(&frame, indirect)
+}
+
 /// The normal of the surface a photon travelling along `dir` landed on at
 /// `p`, facing the photon (against `dir`); `None` when no surface is there.
 fn surface_normal(rt: &dyn RayCaster, p: Vec3, dir: Vec3, diagonal: f32) -> Option<Vec3> {
@@ -369,6 +426,7 @@ mod tests {
             walled: 0,
             samples: 0,
             lift: 1e-3,
+            guides: GuideTable::default(),
             build_s: 0.0,
         }
     }
