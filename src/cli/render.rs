@@ -385,6 +385,8 @@ fn report(args: &RenderArgs, cfg: &RenderConfig, image: &Image, run: &RunReport)
                 "cache_entries": stats.cache_entries,
                 "cache_bytes_per_entry": stats.cache_bytes_per_entry,
                 "cache_walled": stats.cache_walled,
+                "cache_guides": stats.cache_guides.0,
+                "cache_guide_bytes": stats.cache_guides.1,
                 "cache_misses": stats.cache_misses,
                 "dropped_samples": stats.dropped_samples,
                 "mean_rgb": [mean.x, mean.y, mean.z],

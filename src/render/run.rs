@@ -46,6 +46,9 @@ pub struct RenderStats {
     /// Entries that a wall crosses, read only by lookups that see their
     /// representative point (0 without a cache).
     pub cache_walled: usize,
+    /// Cells holding a gather guide, and the bytes of their table (0
+    /// without a cache).
+    pub cache_guides: (usize, usize),
     /// Camera samples whose radiance was NaN or infinite (degenerate
     /// geometry, or a light so close its `I / r^2` overflows f32), left
     /// out of their pixel's mean. Not 0: the image is biased there; the
@@ -322,6 +325,7 @@ fn render_photons(
         cache_entries: cache.map_or(0, |c| c.len()),
         cache_bytes_per_entry: cache.map_or(0, |c| c.bytes_per_entry()),
         cache_walled: cache.map_or(0, |c| c.walled()),
+        cache_guides: cache.map_or((0, 0), |c| (c.guides(), c.guide_bytes())),
         dropped_samples: dropped,
         gather_plan_s: planned.as_ref().map_or(0.0, |p| p.seconds),
         mean_gather: plan.map_or(f64::from(estimator.ctx.gather), GatherPlan::mean),
@@ -401,6 +405,7 @@ impl RenderStats {
             self.cache_entries = other.cache_entries;
             self.cache_bytes_per_entry = other.cache_bytes_per_entry;
             self.cache_walled = other.cache_walled;
+            self.cache_guides = other.cache_guides;
         }
     }
 }

@@ -204,6 +204,7 @@ impl Guide {
 pub(super) struct GuideTable {
     tags: Vec<u32>,
     bins: Vec<[u8; BINS]>,
+    len: usize,
 }
 
 impl GuideTable {
@@ -213,6 +214,7 @@ impl GuideTable {
         let mut t = GuideTable {
             tags: vec![0; slots],
             bins: vec![[0; BINS]; slots],
+            len: entries.len(),
         };
         for (key, h) in entries {
             let mut i = t.home(*key);
@@ -243,6 +245,11 @@ impl GuideTable {
             }
             i = if i + 1 == self.tags.len() { 0 } else { i + 1 };
         }
+    }
+
+    /// Histograms held.
+    pub(super) fn len(&self) -> usize {
+        self.len
     }
 
     /// Bytes held.

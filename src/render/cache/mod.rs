@@ -422,6 +422,11 @@ impl IrradianceCache {
         Some(h.guide(guide::frame(n, shading)))
     }
 
+    /// Cells (of side `8h`) that hold a gather guide.
+    pub fn guides(&self) -> usize {
+        self.guides.len()
+    }
+
     /// Bytes of the gather guides' table (beside the cells' 16 a cell).
     pub fn guide_bytes(&self) -> usize {
         self.guides.bytes()
