@@ -23,8 +23,12 @@ type Setting = (&'static str, fn(&mut RenderConfig));
 fn settings(compared: &str) -> Option<[Setting; 2]> {
     match compared {
         "allocation" => Some([
-            ("uniform", |c| c.gather_allocation = GatherAllocation::Uniform),
-            ("variance", |c| c.gather_allocation = GatherAllocation::Variance),
+            ("uniform", |c| {
+                c.gather_allocation = GatherAllocation::Uniform
+            }),
+            ("variance", |c| {
+                c.gather_allocation = GatherAllocation::Variance
+            }),
         ]),
         "directions" => Some([
             ("brdf", |c| c.gather_directions = GatherDirections::Brdf),

@@ -7,7 +7,7 @@
 //! the same. Paths through mirrors and glass go on with single rays after
 //! their batched first hit ([`Ctx::follow`]).
 
-use super::integrator::{Ctx, SampleScratch, SurfaceHit};
+use super::integrator::{Ctx, GuideMemo, SampleScratch, SurfaceHit};
 use super::sampler::{dim, PixelSampler};
 use super::View;
 use crate::raycast::{Hit, Ray};
@@ -34,6 +34,8 @@ pub(super) struct Batch {
     owners: Vec<(usize, Vec3)>,
     direct: Vec<Vec3>,
     indirect: Vec<Vec3>,
+    /// The last gather guide looked up.
+    guide: GuideMemo,
 }
 
 impl Batch {
@@ -119,10 +121,10 @@ impl Ctx<'_> {
         b.owners.clear();
         for (k, s) in b.surfaces.iter().enumerate() {
             let Some(s) = s else { continue };
-            let guide = self.guide_at(s);
+            let guide = self.guide_reusing(s, &mut b.guide);
             for j in 0..g {
                 let u = px.get_2d(dim::GATHER, b.samples[k] * g + j, n);
-                if let Some((weight, ray)) = self.gather_ray_with(s, u, guide.as_ref()) {
+                if let Some((weight, ray)) = self.gather_ray_with(s, u, guide) {
                     b.rays.push(ray);
                     b.owners.push((k, weight));
                 }

@@ -145,8 +145,10 @@ impl Histogram {
         }
         Guide {
             density,
+            inverse: density.map(|d| 1.0 / d),
             below,
             rows_below,
+            row_inverse: std::array::from_fn(|i| 1.0 / (rows_below[i + 1] - rows_below[i])),
             frame,
         }
     }
@@ -158,37 +160,43 @@ impl Histogram {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Guide {
     density: [f32; BINS],
+    /// `1 / density`: a draw multiplies where it would divide (a division's
+    /// latency sat on the draw's chain of dependent steps).
+    inverse: [f32; BINS],
     /// Each bin's row's density before it.
     below: [f32; BINS],
     /// The rows' density before each row (the last entry: all of it).
     rows_below: [f32; SIDE + 1],
+    /// `1 /` each row's density.
+    row_inverse: [f32; SIDE],
     frame: Frame,
 }
 
 impl Guide {
     /// A direction (world, above the shading normal's plane) from the point
-    /// `u` of the unit square, and its density relative to the cosine's:
-    /// the pdf is `density cos(theta) / pi`.
+    /// `u` of the unit square, and the inverse of its density relative to
+    /// the cosine's: the pdf is `cos(theta) / (pi inverse)`, and a diffuse
+    /// gather ray's weight the albedo times `inverse`.
     #[inline]
     pub fn sample(&self, [u0, u1]: [f32; 2]) -> (Vec3, f32) {
         // The row, then the column in it, by counting the bounds below the
-        // point: no branch to mispredict on random points.
+        // point: no branch to mispredict on random points. Each bound
+        // counted is at most the point, so the offsets are >= 0.
         let x = u0 * self.rows_below[SIDE];
         let i = (1..SIDE).filter(|&k| x >= self.rows_below[k]).count();
-        let row = &self.density[i * SIDE..(i + 1) * SIDE];
-        let width = self.rows_below[i + 1] - self.rows_below[i];
-        let t0 = ((x - self.rows_below[i]) / width).clamp(0.0, ONE_MINUS);
-        let y = u1 * width;
+        let t0 = ((x - self.rows_below[i]) * self.row_inverse[i]).min(ONE_MINUS);
+        let y = u1 * (self.rows_below[i + 1] - self.rows_below[i]);
         let below = &self.below[i * SIDE..(i + 1) * SIDE];
         let j = (1..SIDE).filter(|&k| y >= below[k]).count();
-        let t1 = ((y - below[j]) / row[j]).clamp(0.0, ONE_MINUS);
-        let a = (i as f32 + t0) / SIDE as f32;
-        let b = (j as f32 + t1) / SIDE as f32;
+        let bin = i * SIDE + j;
+        let t1 = ((y - below[j]) * self.inverse[bin]).min(ONE_MINUS);
+        let a = (i as f32 + t0) * (1.0 / SIDE as f32);
+        let b = (j as f32 + t1) * (1.0 / SIDE as f32);
         let sin = a.sqrt();
         let cos = (1.0 - a).max(0.0).sqrt();
         let (s, c) = (TAU * b).sin_cos();
         let local = Vec3::new(sin * c, sin * s, cos);
-        (self.frame.world_from_local(local), row[j])
+        (self.frame.world_from_local(local), self.inverse[bin])
     }
 
     /// The density relative to the cosine's of the world direction `w`
@@ -289,11 +297,11 @@ mod tests {
         let n = 200_000;
         let mut count = [0u32; BINS];
         for _ in 0..n {
-            let (w, d) = g.sample(rng.next_2d());
+            let (w, inverse) = g.sample(rng.next_2d());
             assert!((w.length() - 1.0).abs() < 1e-5 && w.z >= 0.0, "{w}");
             let b = bin_of(w);
-            assert_eq!(d, g.density[b]);
-            assert_eq!(g.density(w), d);
+            assert_eq!(inverse, 1.0 / g.density[b]);
+            assert_eq!(g.density(w), g.density[b]);
             count[b] += 1;
         }
         let sum: f32 = g.density.iter().sum();
@@ -339,8 +347,8 @@ mod tests {
             .guide(LOCAL);
         let (mut s1, mut s2) = (0.0f64, 0.0f64);
         for _ in 0..n {
-            let (w, d) = g.sample(rng.next_2d());
-            let v = (f(w) / d) as f64;
+            let (w, inverse) = g.sample(rng.next_2d());
+            let v = (f(w) * inverse) as f64;
             s1 += v;
             s2 += v * v;
         }

@@ -415,10 +415,19 @@ impl IrradianceCache {
     /// histogram of the directions its indirect photons came from).
     #[inline]
     pub fn guide(&self, x: Vec3, n: Vec3, shading: Vec3) -> Option<Guide> {
-        if self.cells == 0 {
-            return None;
-        }
-        let h = self.guides.get(self.key(x, n, GUIDE_LEVEL))?;
+        self.guide_of(self.guide_key(x, n)?, n, shading)
+    }
+
+    /// The key of the cell whose guide [`Self::guide`] reads at `x`
+    /// (normal `n`); `None` for an empty cache.
+    #[inline]
+    pub(crate) fn guide_key(&self, x: Vec3, n: Vec3) -> Option<u64> {
+        (self.cells > 0).then(|| self.key(x, n, GUIDE_LEVEL))
+    }
+
+    /// [`Self::guide`] of the cell `key` ([`Self::guide_key`]).
+    pub(crate) fn guide_of(&self, key: u64, n: Vec3, shading: Vec3) -> Option<Guide> {
+        let h = self.guides.get(key)?;
         Some(h.guide(guide::frame(n, shading)))
     }
 
