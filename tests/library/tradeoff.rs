@@ -8,6 +8,7 @@ use adaptive_pm::experiments::tradeoff::output::to_json;
 use adaptive_pm::experiments::tradeoff::{
     run_tradeoff, scene_hash, Contender, Reference, TradeoffConfig,
 };
+use adaptive_pm::render::GatherDirections;
 use adaptive_pm::scene::Scene;
 
 const CORNELL_GLTF: &[u8] = include_bytes!("../../assets/cornell_box.gltf");
@@ -28,6 +29,7 @@ fn small(budgets: Vec<u64>, reference_spp: u32) -> TradeoffConfig {
         point_samples: 2048,
         cache_dir: None,
         embree_isa: None,
+        gather_directions: GatherDirections::Brdf,
     }
 }
 

@@ -47,6 +47,11 @@ pub struct TradeoffArgs {
     /// Samples per pixel of the photon renders.
     #[arg(long, default_value_t = TradeoffConfig::default().spp)]
     pub spp: u32,
+    /// Where the photon renders' gather directions come from at a diffuse
+    /// surface: brdf (as the studies in docs/tradeoff/ were measured) or
+    /// guided (the cache's guide, the renderer's default).
+    #[arg(long, default_value = "brdf")]
+    pub gather_directions: adaptive_pm::render::GatherDirections,
     /// Samples per pixel of each half of the path-traced reference.
     #[arg(long, default_value_t = TradeoffConfig::default().reference_spp)]
     pub reference_spp: u32,
@@ -95,6 +100,7 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
         point_samples: args.point_samples,
         cache_dir: Some(args.out.join("cache")),
         embree_isa: args.embree.embree_isa,
+        gather_directions: args.gather_directions,
     };
     cfg.validate()?;
     std::fs::create_dir_all(args.out.join("cache"))

@@ -112,6 +112,10 @@ pub struct TradeoffConfig {
     pub cache_dir: Option<PathBuf>,
     /// Embree's kernel set (`None`: [`Device::new`](crate::embree::Device::new)'s choice).
     pub embree_isa: Option<crate::isa::Isa>,
+    /// Where the renders' gather directions come from (the studies in
+    /// `docs/tradeoff/` drew them by the BRDF, the default here; the
+    /// renderer's own default is the cache's guide).
+    pub gather_directions: crate::render::GatherDirections,
 }
 
 impl Default for TradeoffConfig {
@@ -135,6 +139,7 @@ impl Default for TradeoffConfig {
             point_samples: 4096,
             cache_dir: None,
             embree_isa: None,
+            gather_directions: crate::render::GatherDirections::Brdf,
         }
     }
 }
@@ -169,15 +174,14 @@ impl TradeoffConfig {
     /// A render of this study's size: emitters hidden, one gather ray per
     /// camera sample (the study's spp and reference were sized for one, and
     /// the studies in `docs/tradeoff/` were measured with it; the render's
-    /// default is two), drawn by the BRDF (the studies predate the gather's
-    /// guide, the render's default now).
+    /// default is two), drawn as [`Self::gather_directions`] says.
     pub fn render_config(&self, spp: u32, seed: u64) -> crate::render::RenderConfig {
         let mut c = crate::render::RenderConfig::new(self.width, self.height);
         c.spp = spp;
         c.seed = seed;
         c.show_emitters = false;
         c.final_gather = 1;
-        c.gather_directions = crate::render::GatherDirections::Brdf;
+        c.gather_directions = self.gather_directions;
         c
     }
 }
@@ -244,6 +248,8 @@ pub struct TradeoffResults {
     pub estimate_tracking: summary::Tracking,
     /// Worker threads of the pool the study ran on.
     pub threads: usize,
+    /// Where the renders' gather directions came from (`brdf` or `guided`).
+    pub gather_directions: &'static str,
     /// Wall-clock seconds of the whole study.
     pub elapsed_s: f64,
 }
@@ -312,6 +318,7 @@ pub fn run_tradeoff(
         runs,
         groups,
         threads: rayon::current_num_threads(),
+        gather_directions: cfg.gather_directions.name(),
         elapsed_s: start.elapsed().as_secs_f64(),
     })
 }
