@@ -154,9 +154,14 @@ impl Histogram {
     }
 }
 
-/// Where a diffuse gather draws its directions: a density over the square
-/// of cosine-weighted sampling, per bin, relative to the cosine's, in a
-/// frame about the shading normal.
+/// Where a diffuse gather draws its directions (Jensen 1995, importance
+/// from the photon map): a density over the square of cosine-weighted
+/// sampling, `(sin^2 theta, phi / 2 pi)`, per bin of a 4 x 4 histogram of
+/// the power of the indirect photons that arrived there, relative to the
+/// cosine's: half the cosine's, half the histogram's, so a gather ray's
+/// weight is at most twice the cosine-sampled one. The frame is the
+/// shading normal with a tangent from a fixed axis normal to the geometric
+/// normal's dominant one.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Guide {
     density: [f32; BINS],

@@ -411,8 +411,8 @@ impl IrradianceCache {
 
     /// Where a final gather from the diffuse point `x` (geometric normal
     /// `n`, shading normal `shading`) draws its directions: the guide of
-    /// the cell of `x` that holds one, if any ([`guide`]'s docs: a
-    /// histogram of the directions its indirect photons came from).
+    /// the cell of `x` that holds one, if any ([`Guide`]: a histogram of
+    /// the directions its indirect photons came from).
     #[inline]
     pub fn guide(&self, x: Vec3, n: Vec3, shading: Vec3) -> Option<Guide> {
         self.guide_of(self.guide_key(x, n)?, n, shading)
