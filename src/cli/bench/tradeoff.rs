@@ -74,7 +74,7 @@ pub struct TradeoffArgs {
     pub threads: ThreadArgs,
     #[command(flatten)]
     pub embree: EmbreeArgs,
-    /// Print one JSON object on stdout (the summary goes to stderr).
+    /// Print one JSON object on stdout (the progress and the summary go to stderr).
     #[arg(long)]
     pub json: bool,
 }
@@ -126,12 +126,11 @@ pub fn run(args: TradeoffArgs) -> anyhow::Result<()> {
         }
         return Ok(());
     }
-    let quiet = args.json;
+    // Progress goes to stderr with --json too (the JSON is stdout's): a
+    // study of several minutes said nothing to a log until it ended.
     let results = pool.install(|| {
         run_tradeoff(&args.scene, &scene, &cfg, &|p| {
-            if !quiet {
-                eprintln!("[{}/{}] {}", p.done, p.total, p.stage);
-            }
+            eprintln!("[{}/{}] {}", p.done, p.total, p.stage);
         })
     })?;
     write_outputs(&results, &args.out)?;
