@@ -192,9 +192,8 @@ mod tests {
     use crate::embree::Device;
     use crate::engine::{Budget, Mode, TraceConfig, Tracer};
     use crate::render::cache::{CacheConfig, IrradianceCache};
-    use crate::render::direct::LightSampler;
     use crate::render::estimate::Lookup;
-    use crate::render::{default_max_radius, ray_epsilon, RenderMaps};
+    use crate::render::{default_max_radius, RenderMaps};
     use crate::rng::hash2;
     use crate::scene::Scene;
 
@@ -222,26 +221,11 @@ mod tests {
         let (spp, width) = (20u32, 12u32);
         for (show_emitters, with_cache) in [(false, true), (true, true), (true, false)] {
             let ctx = Ctx {
-                scene: &scene,
-                rt,
-                maps: Some(&maps),
-                cache: with_cache.then_some(&cache),
-                lights: LightSampler::over(&scene, rt),
-                albedo: scene
-                    .materials()
-                    .iter()
-                    .map(|m| crate::engine::albedo::AlbedoTable::new(&m.brdf))
-                    .collect(),
-                view: View::Full,
                 gather: 2,
                 light_samples: 2,
                 spp,
-                lookup,
-                caustic_lookup: lookup,
-                eps: ray_epsilon(&scene),
                 show_emitters,
-                reads: None,
-                guided: true,
+                ..Ctx::for_tests(&scene, rt, &maps, with_cache.then_some(&cache), lookup)
             };
             assert!(ctx.batches());
             let mut sc = SampleScratch::new(lookup.k);

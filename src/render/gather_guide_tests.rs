@@ -5,10 +5,9 @@
 
 use super::cache::{CacheConfig, IrradianceCache};
 use super::camera::CameraRays;
-use super::direct::LightSampler;
 use super::estimate::Lookup;
 use super::integrator::{Ctx, SampleScratch, SurfaceHit};
-use super::{default_max_radius, ray_epsilon, RenderMaps, View};
+use super::{default_max_radius, RenderMaps};
 use crate::embree::Device;
 use crate::engine::{Budget, Mode, TraceConfig, Tracer};
 use crate::rng::Rng;
@@ -74,28 +73,7 @@ fn the_guide_keeps_each_points_gather_and_lowers_its_variance_on_door() {
     let cache =
         IrradianceCache::build(&maps.full, prepared, &CacheConfig { stride: 8, lookup }).unwrap();
     let rt: &dyn crate::raycast::RayCaster = prepared.caster();
-    let ctx = Ctx {
-        scene: &scene,
-        rt,
-        maps: Some(&maps),
-        cache: Some(&cache),
-        lights: LightSampler::over(&scene, rt),
-        albedo: scene
-            .materials()
-            .iter()
-            .map(|m| crate::engine::albedo::AlbedoTable::new(&m.brdf))
-            .collect(),
-        view: View::Full,
-        gather: 1,
-        light_samples: 1,
-        spp: 1,
-        lookup,
-        caustic_lookup: lookup,
-        eps: ray_epsilon(&scene),
-        show_emitters: false,
-        reads: None,
-        guided: true,
-    };
+    let ctx = Ctx::for_tests(&scene, rt, &maps, Some(&cache), lookup);
     let side = 6;
     let rays = CameraRays::new(&scene.camera().unwrap(), side, side);
     let (mut guided_var, mut brdf_var, mut points) = (0.0, 0.0, 0);

@@ -43,6 +43,43 @@ pub(super) struct Ctx<'a> {
     /// guides ([`IrradianceCache::guide`]).
     pub(super) guided: bool,
 }
+#[cfg(test)]
+impl<'a> Ctx<'a> {
+    /// The full view of `maps` (and `cache`) for unit tests: one gather
+    /// ray, one light sample, one sample a pixel, the emitters hidden, the
+    /// gather guided.
+    pub(super) fn for_tests(
+        scene: &'a Scene,
+        rt: &'a dyn RayCaster,
+        maps: &'a RenderMaps,
+        cache: Option<&'a IrradianceCache>,
+        lookup: Lookup,
+    ) -> Self {
+        Ctx {
+            scene,
+            rt,
+            maps: Some(maps),
+            cache,
+            lights: LightSampler::over(scene, rt),
+            albedo: scene
+                .materials()
+                .iter()
+                .map(|m| AlbedoTable::new(&m.brdf))
+                .collect(),
+            view: View::Full,
+            gather: 1,
+            light_samples: 1,
+            spp: 1,
+            lookup,
+            caustic_lookup: lookup,
+            eps: super::ray_epsilon(scene),
+            show_emitters: false,
+            reads: None,
+            guided: true,
+        }
+    }
+}
+
 /// One lookup in this many is timed, its time counted this many times: a
 /// clock read per lookup cost 3.5 % of a render (`__vdso_clock_gettime` in
 /// the profile), for a figure that is a diagnostic. Lookups of a row are

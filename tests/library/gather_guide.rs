@@ -4,41 +4,17 @@
 //! point by point on `door`, in `render::gather_guide_tests`.)
 
 use crate::common::{assert_sigmas, seed, MeanVar};
-use adaptive_pm::embree::{CommittedScene, Device};
-use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
-use adaptive_pm::render::{render_with, GatherDirections, Image, RenderConfig, RenderMaps};
-use adaptive_pm::scene::Scene;
+use crate::fixtures::{grey, rendered, traced};
+use adaptive_pm::render::{GatherDirections, RenderConfig};
 
-fn traced(scene: &str, n_max: u64) -> (Tracer<CommittedScene>, RenderMaps) {
-    let scene = Scene::open(scene).unwrap();
-    let tracer = Tracer::new(scene.commit(&Device::new().unwrap()).unwrap());
-    let mut t = TraceConfig::new(Mode::Adaptive, Budget::NMax(n_max));
-    t.seed = 7;
-    let out = tracer.trace(&t).unwrap();
-    let maps = RenderConfig::new(8, 8).build_maps(out.photons, out.frame);
-    (tracer, maps)
-}
-
-/// Per pixel, the mean over its channels, of one render.
-fn grey(
-    tracer: &Tracer<CommittedScene>,
-    maps: &RenderMaps,
-    (side, spp): (u32, u32),
-    directions: GatherDirections,
-    seed: u64,
-) -> Vec<f64> {
-    let mut cfg = RenderConfig::new(side, side);
-    cfg.spp = spp;
+/// A 48² render of 8 samples a pixel, the emitters hidden.
+fn config(directions: GatherDirections, seed: u64) -> RenderConfig {
+    let mut cfg = RenderConfig::new(48, 48);
+    cfg.spp = 8;
     cfg.gather_directions = directions;
     cfg.show_emitters = false;
     cfg.seed = seed;
-    let img: Image = render_with(tracer.prepared(), Some(maps), None, &cfg, &|_, _| {})
-        .unwrap()
-        .0;
-    img.pixels
-        .iter()
-        .map(|p| p.as_dvec3().element_sum() / 3.0)
-        .collect()
+    cfg
 }
 
 /// On one map (so the map's own error is common to both), the mean of the
@@ -50,13 +26,14 @@ fn grey(
 fn guided_gathers_keep_the_images_expectation() {
     let (tracer, maps) = traced("cornell", 20_000);
     let s = seed(5);
-    let brdf = grey(&tracer, &maps, (48, 8), GatherDirections::Brdf, s);
+    let brdf = grey(&rendered(&tracer, &maps, &config(GatherDirections::Brdf, s)).0);
     let guided = grey(
-        &tracer,
-        &maps,
-        (48, 8),
-        GatherDirections::Guided,
-        s ^ 0x9e37,
+        &rendered(
+            &tracer,
+            &maps,
+            &config(GatherDirections::Guided, s ^ 0x9e37),
+        )
+        .0,
     );
     let d = MeanVar::of(guided.iter().zip(&brdf).map(|(a, b)| a - b));
     let se = (d.variance() / d.count() as f64).sqrt();

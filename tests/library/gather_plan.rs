@@ -4,30 +4,8 @@
 //! is uneven, and the counts do not depend on threads or tiles.
 
 use crate::common::{assert_sigmas, seed, MeanVar};
-use adaptive_pm::embree::{CommittedScene, Device};
-use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
-use adaptive_pm::render::{
-    render_with, GatherAllocation, Image, RenderConfig, RenderMaps, RenderStats,
-};
-use adaptive_pm::scene::Scene;
-
-fn traced(scene: &str, n_max: u64) -> (Tracer<CommittedScene>, RenderMaps) {
-    let scene = Scene::open(scene).unwrap();
-    let tracer = Tracer::new(scene.commit(&Device::new().unwrap()).unwrap());
-    let mut t = TraceConfig::new(Mode::Adaptive, Budget::NMax(n_max));
-    t.seed = 7;
-    let out = tracer.trace(&t).unwrap();
-    let maps = RenderConfig::new(8, 8).build_maps(out.photons, out.frame);
-    (tracer, maps)
-}
-
-fn rendered(
-    tracer: &Tracer<CommittedScene>,
-    maps: &RenderMaps,
-    cfg: &RenderConfig,
-) -> (Image, RenderStats) {
-    render_with(tracer.prepared(), Some(maps), None, cfg, &|_, _| {}).unwrap()
-}
+use crate::fixtures::{grey, rendered, traced};
+use adaptive_pm::render::{GatherAllocation, Image, RenderConfig};
 
 fn config(side: u32, spp: u32, allocation: GatherAllocation, seed: u64) -> RenderConfig {
     let mut cfg = RenderConfig::new(side, side);
@@ -36,14 +14,6 @@ fn config(side: u32, spp: u32, allocation: GatherAllocation, seed: u64) -> Rende
     cfg.show_emitters = false;
     cfg.seed = seed;
     cfg
-}
-
-/// Per pixel, the mean over its channels.
-fn grey(img: &Image) -> Vec<f64> {
-    img.pixels
-        .iter()
-        .map(|p| p.as_dvec3().element_sum() / 3.0)
-        .collect()
 }
 
 /// The image's mean with the counts spread by variance equals the uniform

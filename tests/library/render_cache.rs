@@ -8,8 +8,8 @@ use adaptive_pm::photon_map::{PhotonMap, PhotonRecord};
 use adaptive_pm::raycast::{Ray, RayCaster};
 use adaptive_pm::render::{
     cache::MAX_STRIDE, default_max_radius, floor_points, irradiance_estimate,
-    quadrature_irradiance, render, unshadowed_irradiance, CacheConfig, IrradianceCache, Lookup,
-    RenderConfig, View,
+    quadrature_irradiance, render, unshadowed_irradiance, CacheConfig, GatherDirections,
+    IrradianceCache, Lookup, RenderConfig, View,
 };
 use adaptive_pm::rng::Rng;
 use adaptive_pm::scene::{triangle_area, Scene};
@@ -488,6 +488,9 @@ fn gather_through_the_cache_keeps_the_mean() {
     cfg.spp = 16;
     cfg.view = View::Full;
     cfg.seed = crate::common::seed(1);
+    // The BRDF's gather directions in both: without a cache there is no
+    // guide, and the two renders would no longer share their samples.
+    cfg.gather_directions = GatherDirections::Brdf;
     let cached = render(&prepared, Some(&maps), &cfg).unwrap();
     cfg.cache_stride = 0;
     let knn = render(&prepared, Some(&maps), &cfg).unwrap();

@@ -1,16 +1,17 @@
 //! Gather directions drawn after the light the photons brought (Jensen,
 //! "Importance driven path tracing using the photon map", 1995): each
-//! finest cell keeps a coarse histogram of the directions its indirect
-//! photons arrived from, and the final gather from a diffuse surface draws
-//! its directions from that histogram instead of the cosine.
+//! cache cell of the guide's level (side `8h`) keeps a coarse histogram of
+//! the directions its indirect photons arrived from, and the final gather
+//! from a diffuse surface draws its directions from that histogram and the
+//! cosine.
 //!
 //! - **Domain**: the unit square of cosine-weighted sampling, `sin^2 theta`
 //!   by azimuth over `2 pi`, where the cosine's density is uniform; the
 //!   histogram is [`SIDE`] x [`SIDE`] bins of it. A photon's power in a bin
 //!   is `integral L cos dw` over the bin's directions: for a diffuse
 //!   surface, the gather integrand's mass there.
-//! - **Photons**: those of the finest cell's own k-nearest estimate (the
-//!   photons it saw, on its side, in its plane) that bounced at least once
+//! - **Photons**: those of its finest cells' own k-nearest estimates (the
+//!   photons they saw, on their side, in their plane) that bounced at least once
 //!   and are not caustic photons: the gather counts neither the light's
 //!   emission (light sampling does) nor light through mirrors and glass (the
 //!   caustic map does).
@@ -26,12 +27,13 @@
 //!   monotone map of each coordinate, so the pixel's stratified points stay
 //!   stratified.
 //! - **Frame**: the normal, and a tangent from a fixed axis chosen by the
-//!   normal's dominant axis (the cache's bucket): continuous over a cell's
+//!   geometric normal's dominant axis (the cache's [`bucket`]): continuous over a cell's
 //!   normals, unlike a frame built from the normal alone, which turns where
 //!   the normal's z changes sign (every wall of a box).
-//! - **Storage**: 16 bytes a finest cell (a bin's power relative to the
-//!   largest, 8 bits), in a table of its own keyed like the cache's cells.
+//! - **Storage**: 16 bytes a cell (a bin's power relative to the largest,
+//!   8 bits), in a table of its own keyed like the cache's cells.
 
+use super::bucket;
 use crate::sampling::{luminance, phi_of, Frame};
 use glam::Vec3;
 use std::f32::consts::TAU;
@@ -48,8 +50,7 @@ const BINS: usize = SIDE * SIDE;
 pub const FLOOR: f32 = 0.5;
 const ONE_MINUS: f32 = 1.0 - f32::EPSILON / 2.0;
 
-/// A finest cell's histogram: each bin's power over the largest bin's, in
-/// 1/255.
+/// A cell's histogram: each bin's power over the largest bin's, in 1/255.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct Histogram([u8; BINS]);
 
@@ -57,14 +58,8 @@ pub(super) struct Histogram([u8; BINS]);
 /// normal `n` (both unit, on one side): `n`, and the tangent closest to a
 /// fixed axis normal to `ng`'s dominant one.
 pub(crate) fn frame(ng: Vec3, n: Vec3) -> Frame {
-    let a = ng.abs();
-    let axis = if a.x >= a.y && a.x >= a.z {
-        Vec3::Y
-    } else if a.y >= a.z {
-        Vec3::Z
-    } else {
-        Vec3::X
-    };
+    // The bucket's dominant axis x, y or z picks y, z or x.
+    let axis = [Vec3::Y, Vec3::Z, Vec3::X][bucket(ng) as usize / 2];
     let s = (axis - axis.dot(n) * n).normalize_or_zero();
     if s == Vec3::ZERO {
         return Frame::from_normal(n);
@@ -114,16 +109,6 @@ impl Histogram {
             return None;
         }
         Some(Histogram(power.map(|p| (p / top * 255.0).round() as u8)))
-    }
-
-    /// The bins as bytes, for the table.
-    pub(super) fn bytes(&self) -> [u8; BINS] {
-        self.0
-    }
-
-    /// The histogram of bytes read back from the table.
-    pub(super) fn from_bytes(b: [u8; BINS]) -> Self {
-        Histogram(b)
     }
 
     /// The guide of this histogram in the frame `frame` ([`frame`]): each
@@ -211,7 +196,7 @@ impl Guide {
     }
 }
 
-/// Histograms of the finest cells, keyed like the cache's cells: open
+/// The cells' histograms, keyed like the cache's cells: open
 /// addressing, a 32-bit tag of the key beside the 16 bytes.
 #[derive(Default)]
 pub(super) struct GuideTable {
@@ -235,7 +220,7 @@ impl GuideTable {
                 i = if i + 1 == slots { 0 } else { i + 1 };
             }
             t.tags[i] = tag(*key);
-            t.bins[i] = h.bytes();
+            t.bins[i] = h.0;
         }
         t
     }
@@ -251,7 +236,7 @@ impl GuideTable {
         loop {
             let s = *self.tags.get(i)?;
             if s == t {
-                return Some(Histogram::from_bytes(self.bins[i]));
+                return Some(Histogram(self.bins[i]));
             }
             if s == 0 {
                 return None;
@@ -288,7 +273,7 @@ mod tests {
     };
 
     fn guide_of(bytes: [u8; BINS]) -> Guide {
-        Histogram::from_bytes(bytes).guide(LOCAL)
+        Histogram(bytes).guide(LOCAL)
     }
 
     /// The directions drawn follow `density cos / pi`: the share of draws in
@@ -413,7 +398,7 @@ mod tests {
         let entries: Vec<(u64, Histogram)> = (0..500u64)
             .map(|k| {
                 let key = crate::rng::mix64(k + 1);
-                (key, Histogram::from_bytes([k as u8; BINS]))
+                (key, Histogram([k as u8; BINS]))
             })
             .collect();
         let t = GuideTable::new(&entries);

@@ -239,7 +239,7 @@ pub struct IrradianceCache {
     /// How far above a surface the lookups' segments run (the plane
     /// tolerance), world units.
     lift: f32,
-    /// The finest cells' gather guides ([`guide`]).
+    /// The gather guides of the cells of side `8h` ([`guide`]).
     guides: GuideTable,
     /// Seconds to build (normals, estimates, table).
     pub build_s: f64,
