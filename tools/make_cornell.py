@@ -20,7 +20,9 @@ its accessors.
 The light sits 0.1 below the ceiling (y = 548.7) so the two never coincide,
 and faces down. The cos^n exponent of the light is the material's
 extras.cosn (0 = diffuse)."""
-import base64, json, math, struct, sys
+import math, struct, sys
+
+import gltf_build
 
 QUADS = {
     "floor": ("white", [(552.8, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 559.2), (549.6, 0.0, 559.2)]),
@@ -121,32 +123,16 @@ def icosphere(levels):
     return verts, tris
 
 
-def add_sphere_meshes(blob, accessors, views, gl_meshes, nodes, materials):
+def add_sphere_meshes(b, materials):
     """The SPHERES: one icosphere's positions, normals and indices, shared by
     one mesh per sphere (its own material), each placed by its node."""
     verts, tris = icosphere(SPHERE_LEVELS)
-    first = len(accessors)
     pos = [struct.unpack("<3f", struct.pack("<3f", *(SPHERE_RADIUS * x for x in v))) for v in verts]
-    for data, extra in ((pos, True), (verts, False)):
-        off = len(blob)
-        for v in data:
-            blob += struct.pack("<3f", *v)
-        views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(data), "target": 34962})
-        acc = {"bufferView": len(views) - 1, "componentType": 5126, "count": len(data), "type": "VEC3"}
-        if extra:
-            acc["min"] = [min(v[i] for v in data) for i in range(3)]
-            acc["max"] = [max(v[i] for v in data) for i in range(3)]
-        accessors.append(acc)
-    off = len(blob)
-    for t in tris:
-        blob += struct.pack("<3I", *t)
-    views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(tris), "target": 34963})
-    accessors.append({"bufferView": len(views) - 1, "componentType": 5125, "count": 3 * len(tris), "type": "SCALAR"})
+    attributes = {"POSITION": b.vec3(pos, bounds=True), "NORMAL": b.vec3(verts)}
+    indices = b.triangles(tris)
     for name, material, centre in SPHERES:
         materials.append(material)
-        prim = {"attributes": {"POSITION": first, "NORMAL": first + 1}, "indices": first + 2, "material": len(materials) - 1}
-        gl_meshes.append({"name": name, "primitives": [prim]})
-        nodes.append({"name": name, "mesh": len(gl_meshes) - 1, "translation": list(centre)})
+        b.mesh(name, attributes, indices, len(materials) - 1, translation=list(centre))
 
 
 def main():
@@ -156,51 +142,18 @@ def main():
     if not empty:
         meshes += [(name, "white", quads) for name, quads in BLOCKS.items()]
     materials = list(MATERIALS)
-    blob = bytearray()
-    accessors, views, gl_meshes, nodes = [], [], [], []
+    b = gltf_build.Builder()
     for name, mat, quads in meshes:
-        pos = [v for q in quads for v in q]
-        idx = []
-        for qi in range(len(quads)):
-            b = 4 * qi
-            idx += [b, b + 1, b + 2, b, b + 2, b + 3]
-        off = len(blob)
-        for v in pos:
-            blob += struct.pack("<3f", *v)
-        views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(pos), "target": 34962})
-        lo = [min(v[i] for v in pos) for i in range(3)]
-        hi = [max(v[i] for v in pos) for i in range(3)]
-        accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": len(pos), "type": "VEC3", "min": lo, "max": hi})
-        off = len(blob)
-        for i in idx:
-            blob += struct.pack("<I", i)
-        views.append({"buffer": 0, "byteOffset": off, "byteLength": 4 * len(idx), "target": 34963})
-        accessors.append({"bufferView": len(views) - 1, "componentType": 5125, "count": len(idx), "type": "SCALAR"})
-        gl_meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1, "material": MAT_INDEX[mat]}]})
-        nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
+        b.quad_mesh(name, quads, MAT_INDEX[mat])
     if glass:
-        add_sphere_meshes(blob, accessors, views, gl_meshes, nodes, materials)
+        add_sphere_meshes(b, materials)
     # glTF cameras look down their local -z: turn half a turn about y to look along +z.
-    nodes.append({"name": "camera", "camera": 0, "translation": [278.0, 273.0, -800.0], "rotation": [0.0, 1.0, 0.0, 0.0]})
+    b.nodes.append({"name": "camera", "camera": 0, "translation": [278.0, 273.0, -800.0], "rotation": [0.0, 1.0, 0.0, 0.0]})
     name = "cornell_glass" if glass else "cornell_empty" if empty else "cornell_box"
-    doc = {
-        "asset": {"version": "2.0", "generator": "adaptive-pm tools/make_cornell.py"},
-        "extensionsUsed": ["KHR_materials_emissive_strength"]
-        + (["KHR_materials_ior", "KHR_materials_transmission", "KHR_materials_volume"] if glass else []),
-        "scene": 0,
-        "scenes": [{"name": name, "nodes": list(range(len(nodes)))}],
-        "nodes": nodes,
-        "meshes": gl_meshes,
-        "materials": materials,
-        "cameras": [{"type": "perspective", "perspective": {"yfov": math.radians(39.3077), "aspectRatio": 1.0, "znear": 1.0}}],
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(blob)).decode()}],
-    }
-    out = "assets/" + ("cornell_glass" if glass else "cornell_empty" if empty else "cornell_box") + ".gltf"
-    with open(out, "w") as f:
-        json.dump(doc, f, indent=1)
-        f.write("\n")
+    extensions = ["KHR_materials_emissive_strength"] + (["KHR_materials_ior", "KHR_materials_transmission", "KHR_materials_volume"] if glass else [])
+    camera = {"yfov": math.radians(39.3077), "aspectRatio": 1.0, "znear": 1.0}
+    doc = b.document("tools/make_cornell.py", name, materials, camera, extensions)
+    gltf_build.write("assets/" + name + ".gltf", doc)
 
 
 if __name__ == "__main__":

@@ -22,7 +22,9 @@ An open-fronted room (6 x 3 x 6 m, floor at y = 0, camera outside looking +z):
   panel (cosn 0), a small sharp panel (extras.cosn = 20), a KHR_lights_punctual
   spot light and a dim point light.
 Light panels face down (their winding gives a -y normal): area lights are one-sided."""
-import base64, json, math, struct
+import math
+
+import gltf_build
 
 from make_cornell import icosphere  # tools/ is the script's directory, first on sys.path
 
@@ -147,63 +149,31 @@ def main():
         ("red_block", "red_plastic", *box(-1.9, -1.0, 0.0, 0.9, -0.2, 0.7, 0.4)),
         ("glass_sphere", "glass", *glass_ball(GLASS_CENTRE, GLASS_RADIUS, GLASS_LEVELS)),
     ]
-    blob = bytearray()
-    accessors, views, gl_meshes, nodes = [], [], [], []
+    b = gltf_build.Builder()
     for name, mat, pos, idx in meshes:
         attributes = {}
         if name in SMOOTH:
             centre = SMOOTH[name]
-            normals = [unit(tuple(p[i] - centre[i] for i in range(3))) for p in pos]
-            off = len(blob)
-            for n in normals:
-                blob += struct.pack("<3f", *n)
-            views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(normals), "target": 34962})
-            accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": len(normals), "type": "VEC3"})
-            attributes["NORMAL"] = len(accessors) - 1
-        off = len(blob)
-        for v in pos:
-            blob += struct.pack("<3f", *v)
-        views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(pos), "target": 34962})
-        lo = [min(v[i] for v in pos) for i in range(3)]
-        hi = [max(v[i] for v in pos) for i in range(3)]
-        accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": len(pos), "type": "VEC3", "min": lo, "max": hi})
-        attributes["POSITION"] = len(accessors) - 1
-        off = len(blob)
-        for t in idx:
-            blob += struct.pack("<3I", *t)
-        views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(idx), "target": 34963})
-        accessors.append({"bufferView": len(views) - 1, "componentType": 5125, "count": 3 * len(idx), "type": "SCALAR"})
-        gl_meshes.append({"name": name, "primitives": [{"attributes": attributes, "indices": len(accessors) - 1, "material": MAT[mat]}]})
-        nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
+            attributes["NORMAL"] = b.vec3([unit(tuple(p[i] - centre[i] for i in range(3))) for p in pos])
+        attributes["POSITION"] = b.vec3(pos, bounds=True)
+        b.mesh(name, attributes, b.triangles(idx), MAT[mat])
     spot_pos = (2.2, 2.8, -1.8)
     target = GOLD_CENTRE
     spot_dir = tuple(t - p for t, p in zip(target, spot_pos))
-    nodes.append({"name": "spot", "translation": list(spot_pos), "rotation": look_rotation(spot_dir),
-                  "extensions": {"KHR_lights_punctual": {"light": 0}}})
-    nodes.append({"name": "point", "translation": [-2.4, 1.2, 2.2], "extensions": {"KHR_lights_punctual": {"light": 1}}})
-    nodes.append({"name": "camera", "camera": 0, "translation": [0.0, 1.5, -7.2], "rotation": [0.0, 1.0, 0.0, 0.0]})
-    doc = {
-        "asset": {"version": "2.0", "generator": "adaptive-pm tools/make_gallery.py"},
-        "extensionsUsed": ["KHR_materials_emissive_strength", "KHR_lights_punctual",
-                           "KHR_materials_ior", "KHR_materials_transmission", "KHR_materials_volume"],
-        "extensions": {"KHR_lights_punctual": {"lights": [
-            {"name": "spot", "type": "spot", "color": [0.6, 0.75, 1.0], "intensity": 12.0,
-             "spot": {"innerConeAngle": 0.25, "outerConeAngle": 0.4}},
-            {"name": "point", "type": "point", "color": [1.0, 0.9, 0.8], "intensity": 0.3},
-        ]}},
-        "scene": 0,
-        "scenes": [{"name": "gallery", "nodes": list(range(len(nodes)))}],
-        "nodes": nodes,
-        "meshes": gl_meshes,
-        "materials": MATERIALS,
-        "cameras": [{"type": "perspective", "perspective": {"yfov": math.radians(40.0), "aspectRatio": 1.0, "znear": 0.01}}],
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(blob)).decode()}],
-    }
-    with open("assets/gallery.gltf", "w") as f:
-        json.dump(doc, f, indent=1)
-        f.write("\n")
+    b.nodes.append({"name": "spot", "translation": list(spot_pos), "rotation": look_rotation(spot_dir),
+                    "extensions": {"KHR_lights_punctual": {"light": 0}}})
+    b.nodes.append({"name": "point", "translation": [-2.4, 1.2, 2.2], "extensions": {"KHR_lights_punctual": {"light": 1}}})
+    b.nodes.append({"name": "camera", "camera": 0, "translation": [0.0, 1.5, -7.2], "rotation": [0.0, 1.0, 0.0, 0.0]})
+    extensions_used = ["KHR_materials_emissive_strength", "KHR_lights_punctual",
+                       "KHR_materials_ior", "KHR_materials_transmission", "KHR_materials_volume"]
+    lights = {"KHR_lights_punctual": {"lights": [
+        {"name": "spot", "type": "spot", "color": [0.6, 0.75, 1.0], "intensity": 12.0,
+         "spot": {"innerConeAngle": 0.25, "outerConeAngle": 0.4}},
+        {"name": "point", "type": "point", "color": [1.0, 0.9, 0.8], "intensity": 0.3},
+    ]}}
+    camera = {"yfov": math.radians(40.0), "aspectRatio": 1.0, "znear": 0.01}
+    doc = b.document("tools/make_gallery.py", "gallery", MATERIALS, camera, extensions_used, lights)
+    gltf_build.write("assets/gallery.gltf", doc)
 
 
 if __name__ == "__main__":

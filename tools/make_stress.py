@@ -10,7 +10,9 @@ everything else the camera sees (floor, ceiling, back wall, block) is lit by
 interreflection. Classic photon tracing spends its whole primary budget on
 that spot; the adaptive mode's alpha_D cuts the primaries and splits at the
 first diffuse hit."""
-import base64, json, math, struct
+import math
+
+import gltf_build
 
 W, H, D = 600.0, 400.0, 600.0
 QUADS = {
@@ -47,43 +49,14 @@ MAT_INDEX = {m["name"]: i for i, m in enumerate(MATERIALS)}
 def main():
     meshes = [(name, mat, [quad]) for name, (mat, quad) in QUADS.items()]
     meshes.append(("block", "white", BLOCK))
-    blob = bytearray()
-    accessors, views, gl_meshes, nodes = [], [], [], []
+    b = gltf_build.Builder()
     for name, mat, quads in meshes:
-        pos = [tuple(float(c) for c in v) for q in quads for v in q]
-        idx = [b + o for qi in range(len(quads)) for b in [4 * qi] for o in (0, 1, 2, 0, 2, 3)]
-        off = len(blob)
-        for v in pos:
-            blob += struct.pack("<3f", *v)
-        views.append({"buffer": 0, "byteOffset": off, "byteLength": 12 * len(pos), "target": 34962})
-        lo = [min(v[i] for v in pos) for i in range(3)]
-        hi = [max(v[i] for v in pos) for i in range(3)]
-        accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": len(pos), "type": "VEC3", "min": lo, "max": hi})
-        off = len(blob)
-        for i in idx:
-            blob += struct.pack("<I", i)
-        views.append({"buffer": 0, "byteOffset": off, "byteLength": 4 * len(idx), "target": 34963})
-        accessors.append({"bufferView": len(views) - 1, "componentType": 5125, "count": len(idx), "type": "SCALAR"})
-        gl_meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1, "material": MAT_INDEX[mat]}]})
-        nodes.append({"name": name, "mesh": len(gl_meshes) - 1})
+        b.quad_mesh(name, quads, MAT_INDEX[mat])
     # glTF cameras look down their local -z: half a turn about y looks along +z.
-    nodes.append({"name": "camera", "camera": 0, "translation": [W / 2, H / 2, -700.0], "rotation": [0.0, 1.0, 0.0, 0.0]})
-    doc = {
-        "asset": {"version": "2.0", "generator": "adaptive-pm tools/make_stress.py"},
-        "extensionsUsed": ["KHR_materials_emissive_strength"],
-        "scene": 0,
-        "scenes": [{"name": "stress_room", "nodes": list(range(len(nodes)))}],
-        "nodes": nodes,
-        "meshes": gl_meshes,
-        "materials": MATERIALS,
-        "cameras": [{"type": "perspective", "perspective": {"yfov": math.radians(45.0), "aspectRatio": 1.0, "znear": 1.0}}],
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(blob)).decode()}],
-    }
-    with open("assets/stress_room.gltf", "w") as f:
-        json.dump(doc, f, indent=1)
-        f.write("\n")
+    b.nodes.append({"name": "camera", "camera": 0, "translation": [W / 2, H / 2, -700.0], "rotation": [0.0, 1.0, 0.0, 0.0]})
+    camera = {"yfov": math.radians(45.0), "aspectRatio": 1.0, "znear": 1.0}
+    doc = b.document("tools/make_stress.py", "stress_room", MATERIALS, camera, ["KHR_materials_emissive_strength"])
+    gltf_build.write("assets/stress_room.gltf", doc)
 
 
 if __name__ == "__main__":
