@@ -34,10 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mut variance, mut mean, mut count) = (0.0f64, 0.0f64, 0usize);
     for p in (0..kept.len()).filter(|&p| kept[p]) {
         for c in 0..3 {
-            let v: Vec<f64> = images
-                .iter()
-                .map(|i| f64::from(i.pixels[p][c]))
-                .collect();
+            let v: Vec<f64> = images.iter().map(|i| f64::from(i.pixels[p][c])).collect();
             let m = v.iter().sum::<f64>() / n;
             variance += v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0);
             mean += m;
