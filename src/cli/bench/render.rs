@@ -65,9 +65,10 @@ pub struct RenderBenchArgs {
     /// Photons per radiance estimate of the photon render (and its cache).
     #[arg(long, default_value_t = RenderConfig::new(1, 1).k)]
     pub k: usize,
-    /// Time the fastest photon render at the target and the path tracer
-    /// this many more times, one after the other, and report the median
-    /// ratio (2: the median of three runs).
+    /// Time the photon render at the target (each budget's fewest spp
+    /// there, the fastest budget's) and the path tracer this many more
+    /// times, one after the other, and report the median ratio (2: the
+    /// median of three runs).
     #[arg(long, default_value_t = 0)]
     pub reruns: u32,
     /// Seed.
