@@ -41,8 +41,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             count += 1;
         }
     }
-    if count == 0 || mean <= 0.0 {
-        return Err("no pixel is kept, or the kept ones are black".into());
+    if count == 0 || !mean.is_finite() || mean <= 0.0 || !variance.is_finite() {
+        return Err("no pixel is kept, or the kept ones are black or not finite".into());
     }
     let (variance, mean) = (variance / count as f64, mean / count as f64);
     println!(

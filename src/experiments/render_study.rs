@@ -72,12 +72,13 @@ pub struct StudyConfig {
     /// Render every budget once at this spp instead of searching (the bias
     /// sweep).
     pub fixed_spp: Option<u32>,
-    /// Times the fastest photon render at the target and the path tracer's
-    /// timed render this many more times, alternately ([`Rerun`]); 0: none.
+    /// Times the photon render at the target (each budget's fewest spp
+    /// there, the fastest budget's) and the path tracer's timed render this
+    /// many more times, alternately ([`Rerun`]); 0: none.
     pub reruns: u32,
 }
 
-/// One rerun of the fastest photon render at the target (its whole
+/// One rerun of the photon render at the target (its whole
 /// pipeline: trace, caustic pass, maps, render) and of the path tracer's
 /// timed render, one after the other, so that the ratio compares two times
 /// measured seconds apart on a machine whose speed drifts.
@@ -139,7 +140,8 @@ pub struct CausticResult {
     pub path_rel_rmse: f64,
     /// The path tracer's time to the target over them (`1/sqrt(spp)`).
     pub path_time_to_target_s: f64,
-    /// The fastest photon render at the target over them: its total time.
+    /// The photon render at the target over them (each budget's fewest
+    /// spp there, the fastest budget's): its total time.
     pub photon_time_to_target_s: Option<f64>,
     /// photon time / path time, over the caustic's pixels.
     pub ratio: Option<f64>,
@@ -162,14 +164,15 @@ pub struct StudyResult {
     pub path_time_to_target_s: f64,
     /// Every photon render.
     pub photon: Vec<PhotonRow>,
-    /// The fastest photon render at the target: its total time.
+    /// The photon render at the target (each budget's fewest spp there,
+    /// the fastest budget's): its total time.
     pub photon_time_to_target_s: Option<f64>,
     /// photon time / path time.
     pub ratio: Option<f64>,
     /// The same over the caustic's pixels, when the image has any.
     pub caustic: Option<CausticResult>,
-    /// The fastest photon render at the target and the path tracer, timed
-    /// again ([`StudyConfig::reruns`]).
+    /// That photon render and the path tracer, timed again
+    /// ([`StudyConfig::reruns`]).
     pub reruns: Vec<Rerun>,
     /// The median of the reruns' and the first run's ratios (`None` without
     /// reruns or without a render at the target).
@@ -387,13 +390,19 @@ pub fn run_study<C: RayCaster>(
     let judge = Judge::new(prepared, &base, cfg, log)?;
     let path = time_path(prepared, &base, cfg, &judge, log)?;
     let mut rows = Vec::new();
+    // Each budget's rows, by their span: two budgets may share an N_MAX
+    // and a caustic count and still trace maps of their own.
+    let mut spans = Vec::new();
     for &n_max in &cfg.n_max {
         for &caustic in &cfg.caustic {
             let budget = (n_max, caustic);
+            let start = rows.len();
             photon_budget(tracer, &base, cfg, &judge, budget, log, &mut rows)?;
+            spans.push(start..rows.len());
         }
     }
-    let fastest = |reached: &dyn Fn(&PhotonRow) -> bool| fastest_at_target(&rows, reached);
+    let budgets: Vec<&[PhotonRow]> = spans.iter().map(|s| &rows[s.clone()]).collect();
+    let fastest = |reached: &dyn Fn(&PhotonRow) -> bool| fastest_at_target(&budgets, reached);
     let best_row = fastest(&|r| r.rel_rmse <= cfg.target);
     let best = best_row.map(|r| r.total_s);
     let reruns = match best_row {
@@ -458,26 +467,19 @@ fn rerun<C: RayCaster>(
         .collect()
 }
 
-/// The render to time of `rows`, of those that `reached` the target: per
-/// photon budget the one with the fewest samples per pixel (on the same
-/// maps more samples cost more, so a lower time measured for more of them
-/// is the machine's drift, and the search's bisection renders both sides of
-/// the target), then the fastest of the budgets' (whose maps differ).
+/// The render to time, of those that `reached` the target: per photon
+/// budget (each a slice of `budgets`) the one with the fewest samples per
+/// pixel (on the same maps more samples cost more, so a lower time measured
+/// for more of them is the machine's drift, and the search's bisection
+/// renders both sides of the target), then the fastest of the budgets'
+/// (whose maps differ).
 fn fastest_at_target<'r>(
-    rows: &'r [PhotonRow],
+    budgets: &[&'r [PhotonRow]],
     reached: &dyn Fn(&PhotonRow) -> bool,
 ) -> Option<&'r PhotonRow> {
-    let mut least: Vec<&PhotonRow> = Vec::new();
-    for r in rows.iter().filter(|r| reached(r)) {
-        let budget = |x: &PhotonRow| (x.n_max, x.caustic_photons);
-        match least.iter_mut().find(|l| budget(l) == budget(r)) {
-            Some(l) if r.spp < l.spp => *l = r,
-            Some(_) => {}
-            None => least.push(r),
-        }
-    }
-    least
-        .into_iter()
+    budgets
+        .iter()
+        .filter_map(|rows| rows.iter().filter(|r| reached(r)).min_by_key(|r| r.spp))
         .min_by(|a, b| a.total_s.total_cmp(&b.total_s))
 }
 
@@ -778,14 +780,17 @@ mod tests {
             row(100, 80, 0.029, 2.7),
             row(100, 72, 0.0298, 2.65),
         ];
-        assert_eq!(fastest_at_target(&one, &at).map(|r| r.spp), Some(72));
+        assert_eq!(fastest_at_target(&[&one], &at).map(|r| r.spp), Some(72));
         // Another budget whose fewest samples at the target are faster.
-        let mut two = one.to_vec();
-        two.push(row(300, 48, 0.029, 2.5));
-        two.push(row(300, 64, 0.025, 2.4));
-        let best = fastest_at_target(&two, &at).unwrap();
+        let other = [row(300, 48, 0.029, 2.5), row(300, 64, 0.025, 2.4)];
+        let best = fastest_at_target(&[&one, &other], &at).unwrap();
         assert_eq!((best.n_max, best.spp), (300, 48));
-        assert!(fastest_at_target(&one[..1], &at).is_none());
+        // A second budget of the same N_MAX is a budget of its own.
+        let again = [row(100, 96, 0.028, 2.1), row(100, 128, 0.02, 2.0)];
+        let best = fastest_at_target(&[&one, &again], &at).unwrap();
+        assert_eq!((best.spp, best.total_s), (96, 2.1));
+        assert!(fastest_at_target(&[&one[..1]], &at).is_none());
+        assert!(fastest_at_target(&[], &at).is_none());
     }
 
     #[test]

@@ -261,7 +261,7 @@ mod tests {
             }
             add_mod(i, p, len)
         };
-        for len in [2u32, 3, 5, 17, 72, 96, 144, 1000, 4097] {
+        for len in [2u32, 3, 4, 5, 17, 64, 72, 96, 128, 144, 1000, 4097] {
             for p in [0u32, 1, 0xDEAD_BEEF, 0x9E37_79B9, u32::MAX] {
                 for i in 0..len {
                     assert_eq!(
