@@ -274,6 +274,23 @@ mod tests {
         }
     }
 
+    /// The first indices of a few permutations as an independent Python
+    /// transcription of Kensler's listing gives them (arbitrary-precision
+    /// integers masked to 32 bits): the walk is the published one.
+    #[test]
+    fn permutations_match_an_independent_transcription() {
+        let cases: [(u32, u32, &[u32]); 4] = [
+            (72, 0xDEAD_BEEF, &[43, 52, 10, 28, 9, 39, 34, 25]),
+            (64, 12345, &[44, 55, 34, 35, 1, 39, 47, 23]),
+            (144, 0x9E37_79B9, &[46, 9, 48, 110, 141, 11, 122, 30]),
+            (3, 7, &[1, 2, 0]),
+        ];
+        for (len, p, want) in cases {
+            let got: Vec<u32> = (0..want.len() as u32).map(|i| permute(i, len, p)).collect();
+            assert_eq!(got, want, "len {len} p {p:#x}");
+        }
+    }
+
     #[test]
     fn permutation_is_a_bijection() {
         for len in [1u32, 2, 3, 7, 64, 100] {
