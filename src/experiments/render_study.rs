@@ -94,7 +94,7 @@ pub struct Rerun {
 }
 
 /// One photon render.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct PhotonRow {
     /// N_MAX.
     pub n_max: u64,
@@ -647,20 +647,10 @@ fn photon_budget<C: RayCaster>(
 fn photon_row(img: &Image, judge: &Judge, n_max: u64, spp: u32) -> Result<PhotonRow> {
     Ok(PhotonRow {
         n_max,
-        photons: 0,
-        caustic_photons: 0,
-        caustic_stored: 0,
-        caustic_s: 0.0,
-        trace_s: 0.0,
-        maps_s: 0.0,
         spp,
-        render_s: 0.0,
-        cache_build_s: 0.0,
-        lookup_s: 0.0,
         rel_rmse: judge.error(img)?,
-        caustic_rel_rmse: None,
         bias: mean_bias(img, &judge.reference, &judge.keep)?,
-        total_s: 0.0,
+        ..PhotonRow::default()
     })
 }
 
@@ -750,20 +740,10 @@ mod tests {
     fn row(n_max: u64, spp: u32, rel_rmse: f64, total_s: f64) -> PhotonRow {
         PhotonRow {
             n_max,
-            photons: 0,
-            caustic_photons: 0,
-            caustic_stored: 0,
-            caustic_s: 0.0,
-            trace_s: 0.0,
-            maps_s: 0.0,
             spp,
-            render_s: total_s,
-            cache_build_s: 0.0,
-            lookup_s: 0.0,
             rel_rmse,
-            caustic_rel_rmse: None,
-            bias: [0.0; 3],
             total_s,
+            ..PhotonRow::default()
         }
     }
 
