@@ -127,6 +127,10 @@ pub(super) fn develop<E: PixelEstimator>(
     image
         .pixels
         .par_chunks_mut(width)
+        // A row a task: rayon otherwise splits the rows only down to a
+        // few runs per thread and runs each to its end, so the last run
+        // on one thread left the other idle for a fifth of a render.
+        .with_max_len(1)
         .enumerate()
         .for_each(|(row_index, pixels)| {
             let y = row_index as u32 + y0;

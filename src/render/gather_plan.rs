@@ -194,19 +194,25 @@ pub(super) fn plan(
     }
     let seed = hash2(cfg.seed, PILOT_SALT);
     let mut spreads = vec![Spread::default(); w * h];
-    spreads.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-        let mut sc = SampleScratch::new(cfg.k);
-        for (x, spread) in row.iter_mut().enumerate() {
-            let mut rng = Rng::new(hash2(seed, (y * w + x) as u64));
-            let sample = Sample {
-                x: x as u32,
-                y: y as u32,
-                s: 0,
-            };
-            let ray = film::camera_ray(rays, sample, rng.next_2d());
-            *spread = pilot_pixel(ctx, maps, ray, &mut rng, &mut sc);
-        }
-    });
+    // A row a task, as the render's (`film::develop`): rayon's default
+    // runs of rows left one thread idle at the end.
+    spreads
+        .par_chunks_mut(w)
+        .with_max_len(1)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let mut sc = SampleScratch::new(cfg.k);
+            for (x, spread) in row.iter_mut().enumerate() {
+                let mut rng = Rng::new(hash2(seed, (y * w + x) as u64));
+                let sample = Sample {
+                    x: x as u32,
+                    y: y as u32,
+                    s: 0,
+                };
+                let ray = film::camera_ray(rays, sample, rng.next_2d());
+                *spread = pilot_pixel(ctx, maps, ray, &mut rng, &mut sc);
+            }
+        });
     let weights: Vec<f32> = pooled_sigma(&spreads, w, h)
         .into_iter()
         .map(|sigma| f64::from(sigma).powf(SIGMA_POWER) as f32)
