@@ -94,10 +94,34 @@ pub(super) fn power_per_bin(
 /// The bin of a local direction `w` (`w.z > 0`).
 fn bin_of(w: Vec3) -> usize {
     let u0 = (w.x * w.x + w.y * w.y).min(ONE_MINUS);
-    let u1 = (phi_of(w) / TAU).min(ONE_MINUS);
     let i = ((u0 * SIDE as f32) as usize).min(SIDE - 1);
-    let j = ((u1 * SIDE as f32) as usize).min(SIDE - 1);
-    i * SIDE + j
+    i * SIDE + azimuth_bin(w)
+}
+
+/// The azimuth's bin of `w`: its quadrant, read from the signs of `w.x`
+/// and `w.y` where `w` is clear of the quadrants' edges, else from
+/// [`phi_of`]. The same bin either way (an `atan2` is within an ulp or two,
+/// and the signs are used only a milliradian away from an edge), for a
+/// tenth of the cache's build: the build bins every photon of every
+/// finest cell's estimate.
+fn azimuth_bin(w: Vec3) -> usize {
+    const _: () = assert!(SIDE == 4, "the signs give quadrants");
+    let (ax, ay) = (w.x.abs(), w.y.abs());
+    if ax.min(ay) > 1e-3 * ax.max(ay) {
+        return match (w.x > 0.0, w.y > 0.0) {
+            (true, true) => 0,
+            (false, true) => 1,
+            (false, false) => 2,
+            (true, false) => 3,
+        };
+    }
+    azimuth_bin_by_angle(w)
+}
+
+/// [`azimuth_bin`] by the angle: `floor(SIDE phi / (2 pi))`.
+fn azimuth_bin_by_angle(w: Vec3) -> usize {
+    let u1 = (phi_of(w) / TAU).min(ONE_MINUS);
+    ((u1 * SIDE as f32) as usize).min(SIDE - 1)
 }
 
 impl Histogram {
@@ -265,6 +289,42 @@ fn tag(key: u64) -> u32 {
 mod tests {
     use super::*;
     use crate::rng::Rng;
+
+    /// The quadrant by the signs is the angle's bin: for random directions,
+    /// for directions a hair off each axis (both sides, at many scales),
+    /// and for the axes themselves and their signed zeros.
+    #[test]
+    fn the_azimuths_bin_by_signs_is_the_angles() {
+        let mut rng = Rng::new(17);
+        let mut dirs: Vec<Vec3> = (0..100_000)
+            .map(|_| {
+                let [a, b] = rng.next_2d();
+                Vec3::new(2.0 * a - 1.0, 2.0 * b - 1.0, 0.5)
+            })
+            .collect();
+        for e in 0..40 {
+            let hair = 2f32.powi(-e);
+            for (big, small) in [(1.0f32, hair), (hair, 1.0)] {
+                for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)] {
+                    dirs.push(Vec3::new(sx * big, sy * small, 0.5));
+                    // Just either side of the shortcut's 1e-3 threshold.
+                    let edge = 1e-3 * big.max(small);
+                    for t in [edge * 0.999_99, edge * 1.000_01] {
+                        dirs.push(Vec3::new(sx * big.max(small), sy * t, 0.5));
+                        dirs.push(Vec3::new(sx * t, sy * big.max(small), 0.5));
+                    }
+                }
+            }
+        }
+        for x in [0.0f32, -0.0, 1.0, -1.0] {
+            for y in [0.0f32, -0.0, 1.0, -1.0] {
+                dirs.push(Vec3::new(x, y, 0.5));
+            }
+        }
+        for w in dirs {
+            assert_eq!(azimuth_bin(w), azimuth_bin_by_angle(w), "{w:?}");
+        }
+    }
 
     const LOCAL: Frame = Frame {
         s: Vec3::X,

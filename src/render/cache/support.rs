@@ -74,6 +74,11 @@ pub struct Sight {
     /// Whether any ray hit: if none did, every photon within the range is
     /// in sight.
     blocked: bool,
+    /// A distance within which every point of the plane is in sight: the
+    /// nearest face's line (or hit) less a margin for rounding, 0 when a
+    /// face is degenerate. Most of an estimate's photons lie within it,
+    /// and [`Sight::admits`] takes them without an angle.
+    clear: f32,
 }
 
 /// The sub-angles a sector's share integrates over (midpoints).
@@ -121,7 +126,31 @@ impl Sight {
                 sight.blocked = true;
             }
         }
+        sight.clear = sight.clear_distance();
         sight
+    }
+
+    /// [`Sight::clear`]: no direction sees less than the least of the rays'
+    /// bounds. A face's line at signed offset `at_hit < 0` is `|at_hit|`
+    /// away at its nearest, and [`Sight::to_face`] divides by a cosine of at
+    /// most 1 (a rounding above 1 is what the margin is for); a ray without a
+    /// face line reads its hit distance. A face with `at_hit >= 0` (or
+    /// NaN) can read less than any bound: then nothing is clear.
+    fn clear_distance(&self) -> f32 {
+        let mut clear = f32::INFINITY;
+        for (&d, &(nx, ny, at_hit)) in self.reach.iter().zip(&self.face) {
+            let bound = if !d.is_finite() {
+                continue;
+            } else if nx == 0.0 && ny == 0.0 {
+                d
+            } else if at_hit < 0.0 {
+                -at_hit
+            } else {
+                return 0.0;
+            };
+            clear = clear.min(bound);
+        }
+        clear * (1.0 - 1e-4)
     }
 
     /// A sight that nothing blocks, about the normal `n`.
@@ -132,6 +161,7 @@ impl Sight {
             reach: [f32::INFINITY; DIRECTIONS as usize],
             face: [(0.0, 0.0, 0.0); DIRECTIONS as usize],
             blocked: false,
+            clear: f32::INFINITY,
         }
     }
 
@@ -185,6 +215,17 @@ impl Sight {
             return true;
         }
         let local = self.frame.local_from_world(offset);
+        // Strictly within the clear distance (squared, so without the
+        // hypot: the margin covers its rounding), in sight at any angle.
+        if local.x * local.x + local.y * local.y < self.clear * self.clear {
+            return true;
+        }
+        self.admits_by_angle(local)
+    }
+
+    /// [`Sight::admits`] of the offset whose tangent-plane coordinates are
+    /// `local`, by its angle.
+    fn admits_by_angle(&self, local: Vec3) -> bool {
         let along = local.x.hypot(local.y);
         along <= self.seen_at(local.y.atan2(local.x))
     }
@@ -334,6 +375,53 @@ mod tests {
             assert!(past <= past_at_most, "{at}, past the wall {past}");
             assert!(admitted > least * want, "{at}, of {want}");
         }
+    }
+
+    /// The clear distance's shortcut admits what the angle does: sights
+    /// cast from points of `door` and the Cornell box (beside walls,
+    /// blocks, corners and the doorway), offsets at random and just inside
+    /// and outside the clear distance.
+    #[test]
+    fn the_clear_distance_admits_what_the_angle_does() {
+        let device = Device::new().unwrap();
+        let mut rng = crate::rng::Rng::new(23);
+        let mut shortcuts = 0;
+        for name in ["door", "cornell"] {
+            let scene = Scene::open(name).unwrap();
+            let prepared = scene.clone().commit(&device).unwrap();
+            let rt = prepared.caster();
+            let (lo, hi) = scene.bounds();
+            let tol = crate::render::cache::PLANE_TOLERANCE * (hi - lo).length();
+            let range = crate::render::default_max_radius(&scene);
+            for _ in 0..300 {
+                // A point on the floor (y = lo.y), anywhere over it.
+                let [u, v] = rng.next_2d();
+                let x = Vec3::new(lo.x + u * (hi.x - lo.x), lo.y, lo.z + v * (hi.z - lo.z));
+                let sight = Sight::cast(rt, x, Vec3::Y, tol, rng.next_f32(), range);
+                if !sight.blocked {
+                    continue;
+                }
+                for i in 0..400 {
+                    let [a, b] = rng.next_2d();
+                    let phi = TAU * a;
+                    let rho = match i % 4 {
+                        0 => range * b,
+                        1 => sight.clear * (1.0 - 1e-6 * b),
+                        2 => sight.clear * (1.0 + 1e-6 * b),
+                        _ => sight.clear * 2.0 * b,
+                    };
+                    let local = Vec3::new(rho * phi.cos(), rho * phi.sin(), 0.0);
+                    let offset = sight.frame.world_from_local(local);
+                    let fast = sight.admits(offset);
+                    let slow = sight.admits_by_angle(sight.frame.local_from_world(offset));
+                    assert_eq!(fast, slow, "{name} at {x}, offset {offset}");
+                    let l = sight.frame.local_from_world(offset);
+                    shortcuts += usize::from(l.x * l.x + l.y * l.y < sight.clear * sight.clear);
+                }
+            }
+        }
+        // The shortcut was taken, so the comparison is not of the slow path alone.
+        assert!(shortcuts > 10_000, "{shortcuts} shortcuts");
     }
 
     #[test]
