@@ -352,6 +352,7 @@ impl<'a> Ctx<'a> {
     /// its weight (BRDF times cosine over pdf): the gather's sampling, also
     /// the importance pass's ([`super::importance_walk`]). `None` for no
     /// sample or one below the surface.
+    #[inline(always)]
     pub(super) fn gather_ray(&self, s: &SurfaceHit, u: [f32; 2]) -> Option<(Vec3, Ray)> {
         let frame = Frame::from_normal(s.shading);
         let bs = s.brdf.sample(frame.local_from_world(s.wo), u)?;
@@ -393,7 +394,10 @@ impl<'a> Ctx<'a> {
     /// [`Self::gather_ray`], its direction drawn from `guide` when there is
     /// one (a diffuse `s`): the weight is the albedo over the guide's
     /// density relative to the cosine's ([`Guide::sample`]).
-    #[inline]
+    // Always inlined: returned through the stack, its ray was written by the
+    // callee and read back by wider loads (a store-forwarding stall, 5 % of
+    // `radiance_batch` in `perf annotate`).
+    #[inline(always)]
     pub(super) fn gather_ray_with(
         &self,
         s: &SurfaceHit,
