@@ -135,7 +135,7 @@ fn a_bad_scene_name_lists_the_built_in_names() {
 
 /// `bench render --reruns 2`: the fastest photon render at the target and
 /// the path tracer timed twice more, each rerun's ratio and the median of
-/// the three in the JSON, with the gather and k it ran with.
+/// the three in the JSON, with the gather, k and cache stride it ran with.
 #[test]
 fn bench_render_reruns_report_their_ratios_and_median() {
     let out = run_ok(
@@ -150,13 +150,15 @@ fn bench_render_reruns_report_their_ratios_and_median() {
                 "3000",
             ])
             .args(["--max-spp", "64", "--target", "0.5", "--reruns", "2"])
-            .args(["--final-gather", "1", "--k", "40", "--threads", "1"]),
+            .args(["--final-gather", "1", "--k", "40", "--threads", "1"])
+            .args(["--cache-stride", "16"]),
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(
         (v["final_gather"].as_u64(), v["k"].as_u64()),
         (Some(1), Some(40))
     );
+    assert_eq!(v["cache_stride"].as_u64(), Some(16));
     let result = &v["result"];
     let reruns = result["reruns"].as_array().unwrap();
     assert_eq!(reruns.len(), 2);
@@ -174,4 +176,29 @@ fn bench_render_reruns_report_their_ratios_and_median() {
     }
     ratios.sort_by(f64::total_cmp);
     assert_eq!(result["median_ratio"].as_f64(), Some(ratios[1]));
+}
+
+/// `bench render` refuses a cache stride the renderer would refuse, before
+/// any rendering, naming the setting.
+#[test]
+fn bench_render_refuses_a_bad_cache_stride() {
+    let out = bin()
+        .args([
+            "bench",
+            "render",
+            "cornell",
+            "--size",
+            "16",
+            "--cache-stride",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("cache stride") && err.contains("got 1"),
+        "{err}"
+    );
+    assert!(out.stdout.is_empty());
 }

@@ -65,6 +65,10 @@ pub struct RenderBenchArgs {
     /// Photons per radiance estimate of the photon render (and its cache).
     #[arg(long, default_value_t = RenderConfig::new(1, 1).k)]
     pub k: usize,
+    /// Photons per irradiance-cache sample of the photon render, 2 or more
+    /// (0: the gather reads the k nearest photons).
+    #[arg(long, default_value_t = RenderConfig::new(1, 1).cache_stride)]
+    pub cache_stride: u32,
     /// Time the photon render at the target (each budget's fewest spp
     /// there, the fastest budget's) and the path tracer this many more
     /// times, one after the other, and report the median ratio (2: the
@@ -96,6 +100,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
     render.gather_allocation = args.gather_allocation;
     render.gather_directions = args.gather_directions;
     render.k = args.k;
+    render.cache_stride = args.cache_stride;
     render.check()?;
     let cfg = StudyConfig {
         size: args.size,
@@ -132,6 +137,7 @@ pub fn run(args: RenderBenchArgs) -> anyhow::Result<()> {
             "threads": pool.current_num_threads(), "loadavg": load.trim(),
             "light_samples": args.light_samples,
             "final_gather": args.final_gather, "k": args.k,
+            "cache_stride": args.cache_stride,
             "gather_allocation": args.gather_allocation.name(),
             "gather_directions": args.gather_directions.name(),
             "result": result, "direct": direct,
