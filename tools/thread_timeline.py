@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """How busy each thread of a run was, window by window, from a `perf`
-recording sampled by the clock:
+recording at a fixed rate (`-F`; on a machine without hardware counters
+perf samples by the CPU clock):
 
     perf record -F 999 -o P -- adaptive-pm render cornell --map M --spp 72 --out x.exr
     perf script -i P -F tid,time | python3 tools/thread_timeline.py [WINDOW_S [CORES]]
@@ -58,8 +59,13 @@ def main(window, cores):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) > 3:
-        sys.exit(__doc__)
-    window = float(sys.argv[1]) if len(sys.argv) > 1 else 0.1
-    cores = int(sys.argv[2]) if len(sys.argv) > 2 else os.cpu_count()
+    try:
+        if len(sys.argv) > 3:
+            raise ValueError
+        window = float(sys.argv[1]) if len(sys.argv) > 1 else 0.1
+        cores = int(sys.argv[2]) if len(sys.argv) > 2 else (os.cpu_count() or 1)
+        if not (window > 0 and cores >= 1):
+            raise ValueError
+    except ValueError:
+        sys.exit(__doc__ + "\nWINDOW_S must be a positive number of seconds, CORES a count of 1 or more")
     main(window, cores)
