@@ -107,7 +107,8 @@ fn bin_of(w: Vec3) -> usize {
 fn azimuth_bin(w: Vec3) -> usize {
     const _: () = assert!(SIDE == 4, "the signs give quadrants");
     let (ax, ay) = (w.x.abs(), w.y.abs());
-    if ax.min(ay) > 1e-3 * ax.max(ay) {
+    // Each at least a thousandth of the other (false for a NaN).
+    if ax > 1e-3 * ay && ay > 1e-3 * ax {
         return match (w.x > 0.0, w.y > 0.0) {
             (true, true) => 0,
             (false, true) => 1,
@@ -292,7 +293,8 @@ mod tests {
 
     /// The quadrant by the signs is the angle's bin: for random directions,
     /// for directions a hair off each axis (both sides, at many scales),
-    /// and for the axes themselves and their signed zeros.
+    /// for the axes themselves and their signed zeros, and for NaN and
+    /// infinite components.
     #[test]
     fn the_azimuths_bin_by_signs_is_the_angles() {
         let mut rng = Rng::new(17);
@@ -316,8 +318,8 @@ mod tests {
                 }
             }
         }
-        for x in [0.0f32, -0.0, 1.0, -1.0] {
-            for y in [0.0f32, -0.0, 1.0, -1.0] {
+        for x in [0.0f32, -0.0, 1.0, -1.0, f32::NAN, f32::INFINITY] {
+            for y in [0.0f32, -0.0, 1.0, -1.0, f32::NAN, f32::NEG_INFINITY] {
                 dirs.push(Vec3::new(x, y, 0.5));
             }
         }
