@@ -103,7 +103,7 @@ impl IrradianceCache {
         // rayon's default runs, one thread finished its last run alone.
         let values: Vec<FineCell> = groups
             .par_iter()
-            .with_max_len(RUN)
+            .with_max_len(MAX_PER_TASK)
             .map_init(&scratch, |sc, g| {
                 let rep = Self::pick(&samples, g);
                 let sample = samples[rep as usize];
@@ -115,7 +115,7 @@ impl IrradianceCache {
             .collect();
         let fine_entries: Vec<Entry> = groups
             .par_iter()
-            .with_max_len(RUN)
+            .with_max_len(MAX_PER_TASK)
             .zip(&values)
             .map(|(g, v)| cache.fine_entry(rt, &samples, g[0].0, v))
             .collect();
@@ -177,7 +177,7 @@ impl IrradianceCache {
         let cells: Vec<&[(u64, u32, u32)]> = keyed.chunk_by(|a, b| a.0 == b.0).collect();
         cells
             .par_iter()
-            .with_max_len(RUN)
+            .with_max_len(MAX_PER_TASK)
             .map(|group| {
                 let sparsest = group
                     .iter()
@@ -283,7 +283,7 @@ impl IrradianceCache {
 }
 
 /// Cells (or samples) a parallel task of the build takes at most.
-const RUN: usize = 32;
+const MAX_PER_TASK: usize = 32;
 
 /// A cell's entry in the table: its key, its irradiance (RGBE) and, for a
 /// walled cell, its representative's position ([`walls::encode`]).
@@ -375,7 +375,7 @@ where
     let mut radii: Vec<f32> = samples
         .par_iter()
         .step_by(probe_step)
-        .with_max_len(RUN)
+        .with_max_len(MAX_PER_TASK)
         .map_init(scratch, |sc, &s| estimate(sc, s).estimate.radius)
         .collect();
     let mid = radii.len() / 2;
