@@ -73,14 +73,34 @@ impl Scene {
     /// perturbed by its material's normal texture when it has one (module
     /// docs); `None` for a flat mesh without a normal texture (shade with
     /// the geometric normal). Not flipped to any side.
+    ///
+    /// A flat mesh without a normal texture (every hit of the built-in
+    /// boxes) is answered inline: the full lookup, a call at every photon
+    /// hit, cost the tracer about 70 instructions a hit (callgrind).
+    #[inline]
     pub fn shading_normal(&self, hit: &Hit) -> Option<Vec3> {
         let mesh = self.meshes.get(hit.geom_id as usize)?;
+        let map = self
+            .material_maps(mesh.material)
+            .and_then(|m| m.normal.as_ref());
+        if mesh.normals.is_empty() && map.is_none() {
+            return None;
+        }
+        self.curved_shading_normal(mesh, map, hit)
+    }
+
+    /// [`Self::shading_normal`] of a mesh with vertex normals or a normal
+    /// texture (`map`).
+    #[inline(never)]
+    fn curved_shading_normal(
+        &self,
+        mesh: &Mesh,
+        map: Option<&NormalMap>,
+        hit: &Hit,
+    ) -> Option<Vec3> {
         let i = hit.prim_id as usize;
         let interpolated = mesh.shading_normal(i, hit.u, hit.v);
-        let Some(map) = self
-            .material_maps(mesh.material)
-            .and_then(|m| m.normal.as_ref())
-        else {
+        let Some(map) = map else {
             return interpolated;
         };
         let base = interpolated.or_else(|| mesh.winding_normal(i))?;
@@ -252,6 +272,51 @@ mod tests {
         let texel = Vec4::new(0.75, 0.25, 0.8, 1.0);
         let n = tangent_space_normal(texel, 2.0);
         assert!((n - Vec3::new(1.0, -1.0, 0.6)).length() < 1e-6, "{n}");
+    }
+
+    /// One triangle in z = 0 (winding normal +z) of a grey material.
+    fn one_triangle() -> Scene {
+        let mut scene = Scene::new();
+        let grey = scene.add_material(crate::scene::Material {
+            name: "grey".into(),
+            brdf: crate::brdf::Lambert::new(Vec3::splat(0.5)).unwrap().into(),
+            emission: None,
+        });
+        let positions = vec![Vec3::ZERO, Vec3::X, Vec3::Y];
+        scene
+            .add_mesh("t", positions, vec![[0, 1, 2]], grey)
+            .unwrap();
+        scene
+    }
+
+    fn hit_at(u: f32, v: f32) -> Hit {
+        Hit {
+            t: 1.0,
+            ng: Vec3::Z,
+            geom_id: 0,
+            prim_id: 0,
+            u,
+            v,
+            material: 0,
+        }
+    }
+
+    #[test]
+    fn a_flat_mesh_has_no_shading_normal_and_vertex_normals_are_interpolated() {
+        let mut scene = one_triangle();
+        assert_eq!(scene.shading_normal(&hit_at(0.25, 0.25)), None);
+        let tilted = Vec3::new(1.0, 0.0, 1.0).normalize();
+        scene
+            .set_vertex_normals(0, vec![Vec3::Z, tilted, Vec3::Z])
+            .unwrap();
+        let n = scene.shading_normal(&hit_at(0.5, 0.0)).unwrap();
+        let want = (Vec3::Z + tilted).normalize();
+        assert!((n - want).length() < 1e-6, "{n}");
+        assert_eq!(scene.shading_normal(&hit_at(0.0, 0.0)), Some(Vec3::Z));
+        // A hit on a mesh the scene does not have.
+        let mut far = hit_at(0.0, 0.0);
+        far.geom_id = 3;
+        assert_eq!(scene.shading_normal(&far), None);
     }
 
     #[test]
