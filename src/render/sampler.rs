@@ -160,6 +160,12 @@ pub fn permute(i: u32, len: u32, p: u32) -> u32 {
     w |= w >> 8;
     w |= w >> 16;
     let first = kensler_step(i, w, p);
+    if w == len - 1 {
+        // A power of two (the render's doubling spp): every step lands in
+        // range, and `p % len` is a mask. The second step and the division
+        // were most of this function's time there.
+        return first.wrapping_add(p) & w;
+    }
     let second = kensler_step(first, w, p);
     let mut i = if first < len { first } else { second };
     while i >= len {
@@ -261,7 +267,7 @@ mod tests {
             }
             add_mod(i, p, len)
         };
-        for len in [2u32, 3, 4, 5, 17, 64, 72, 96, 128, 144, 1000, 4097] {
+        for len in [2u32, 3, 4, 5, 17, 64, 72, 96, 128, 144, 1000, 4097, 1 << 16] {
             for p in [0u32, 1, 0xDEAD_BEEF, 0x9E37_79B9, u32::MAX] {
                 for i in 0..len {
                     assert_eq!(
