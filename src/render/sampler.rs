@@ -143,12 +143,14 @@ const fn pascal_bytes() -> [[u32; 256]; 4] {
 /// A permutation of `0..len` chosen by `p`, evaluated at `i` (Kensler 2013:
 /// a hashed bijection on the next power of two, cycle-walked into range).
 ///
-/// The walk's first two steps are taken whatever their outcome and the
-/// first one in range kept by a select: where `len` is not a power of two
-/// the loop's exit is a coin toss (at 72 samples a pixel, 43 % of steps
-/// land out of range), and its mispredictions made the sampler twice as
-/// dear as at 64 (`perf`, 7.6 % of a render against 3.7 %). Only a third
-/// step, rarer, branches. The result is the walk's: the same permutation.
+/// Where `len` is a power of two (the render's doubling spp) every step
+/// lands in range and `p % len` is a mask: one step, no division. Elsewhere
+/// the walk's first two steps are taken whatever their outcome and the
+/// first one in range kept by a select: the loop's exit is a coin toss
+/// there (at 72 samples a pixel, 43 % of steps land out of range), and its
+/// mispredictions made the sampler twice as dear as at 64 (`perf`, 7.6 %
+/// of a render against 3.7 %). Only a third step, rarer, branches. The
+/// result is the walk's: the same permutation.
 pub fn permute(i: u32, len: u32, p: u32) -> u32 {
     if len <= 1 {
         return 0;
@@ -161,9 +163,6 @@ pub fn permute(i: u32, len: u32, p: u32) -> u32 {
     w |= w >> 16;
     let first = kensler_step(i, w, p);
     if w == len - 1 {
-        // A power of two (the render's doubling spp): every step lands in
-        // range, and `p % len` is a mask. The second step and the division
-        // were most of this function's time there.
         return first.wrapping_add(p) & w;
     }
     let second = kensler_step(first, w, p);

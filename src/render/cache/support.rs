@@ -139,9 +139,10 @@ impl Sight {
     fn clear_distance(&self) -> f32 {
         let mut clear = f32::INFINITY;
         for (&d, &(nx, ny, at_hit)) in self.reach.iter().zip(&self.face) {
-            let bound = if !d.is_finite() {
+            if !d.is_finite() {
                 continue;
-            } else if nx == 0.0 && ny == 0.0 {
+            }
+            let bound = if nx == 0.0 && ny == 0.0 {
                 d
             } else if at_hit < 0.0 {
                 -at_hit
