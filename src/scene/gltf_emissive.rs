@@ -29,7 +29,9 @@ pub(super) fn read_emissive(
         ));
         return Ok(());
     }
-    let r = loader.texture_ref(&info, scene)?;
+    let Some(r) = loader.texture_ref(&info, scene)? else {
+        return Ok(());
+    };
     let mean = scene.textures[r.texture].mean(Encoding::Srgb).truncate();
     if mean.max_element() <= 0.0 {
         scene.warnings.push(format!(

@@ -120,7 +120,7 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
 
     let mut scene = Scene::new();
     let mut material_ids = Vec::with_capacity(doc.materials().len());
-    let mut textures = super::gltf_textures::TextureLoader::new(&buffers, assets);
+    let mut textures = super::gltf_textures::TextureLoader::new(doc.as_json(), &buffers, assets);
     for m in doc.materials() {
         let (material, factors) = convert_material(&m)?;
         let specular = material.brdf.is_specular();

@@ -27,12 +27,15 @@ use std::collections::HashMap;
 
 /// Loads each texture once, the first time a material reads it.
 pub(super) struct TextureLoader<'a> {
+    json: &'a gltf::json::Root,
     buffers: &'a [Vec<u8>],
     assets: Option<&'a AssetRoot>,
     /// glTF texture index -> scene texture index.
     loaded: HashMap<usize, usize>,
     /// Texels the scene's textures may still take.
     budget: u64,
+    /// glTF textures without an image this loader reads, already warned of.
+    sourceless: Vec<usize>,
 }
 
 fn wrap_of(w: gltf::texture::WrappingMode) -> Wrap {
@@ -56,12 +59,18 @@ fn sampler_of(s: &gltf::texture::Sampler) -> Sampler {
 }
 
 impl<'a> TextureLoader<'a> {
-    pub(super) fn new(buffers: &'a [Vec<u8>], assets: Option<&'a AssetRoot>) -> Self {
+    pub(super) fn new(
+        json: &'a gltf::json::Root,
+        buffers: &'a [Vec<u8>],
+        assets: Option<&'a AssetRoot>,
+    ) -> Self {
         TextureLoader {
+            json,
             buffers,
             assets,
             loaded: HashMap::new(),
             budget: MAX_TEXELS,
+            sourceless: Vec::new(),
         }
     }
 
@@ -99,14 +108,17 @@ impl<'a> TextureLoader<'a> {
             return Ok(None);
         }
         let mut load = |info: Option<gltf::texture::Info>| -> Result<Option<TextureRef>> {
-            info.map(|i| self.texture_ref(&i, scene)).transpose()
+            Ok(info.map(|i| self.texture_ref(&i, scene)).transpose()?.flatten())
         };
         let base_color = load(base)?;
         let metallic_roughness = load(mr)?;
         let normal = match normal {
-            Some(n) => Some(self.normal_map(&n, scene)?),
+            Some(n) => self.normal_map(&n, scene)?,
             None => None,
         };
+        if base_color.is_none() && metallic_roughness.is_none() && normal.is_none() {
+            return Ok(None);
+        }
         Ok(Some(MaterialMaps {
             factors,
             base_color,
@@ -115,15 +127,28 @@ impl<'a> TextureLoader<'a> {
         }))
     }
 
-    /// The scene texture of glTF texture `t`, loaded on first use.
-    fn scene_texture(&mut self, t: &gltf::Texture, scene: &mut Scene) -> Result<usize> {
+    /// The scene texture of glTF texture `t`, loaded on first use; `None`
+    /// (and a warning, once) when `t` names no image.
+    fn scene_texture(&mut self, t: &gltf::Texture, scene: &mut Scene) -> Result<Option<usize>> {
         if let Some(&i) = self.loaded.get(&t.index()) {
-            return Ok(i);
+            return Ok(Some(i));
+        }
+        if !self.has_source(t) {
+            if !self.sourceless.contains(&t.index()) {
+                self.sourceless.push(t.index());
+                let label = super::gltf_checks::label("texture", t.index(), t.name());
+                scene.warnings.push(format!(
+                    "{label} has no `source` image: its image would come from an extension \
+                     (EXT_texture_webp, KHR_texture_basisu) whose images are not decoded, so \
+                     the materials that read it use their factors alone"
+                ));
+            }
+            return Ok(None);
         }
         let texture = self.load(t)?;
         let i = scene.add_texture(texture);
         self.loaded.insert(t.index(), i);
-        Ok(i)
+        Ok(Some(i))
     }
 
     /// A `normalTexture`: not a `textureInfo` in the gltf crate, so its
@@ -133,20 +158,22 @@ impl<'a> TextureLoader<'a> {
         &mut self,
         n: &gltf::material::NormalTexture,
         scene: &mut Scene,
-    ) -> Result<NormalMap> {
-        let texture = self.scene_texture(&n.texture(), scene)?;
+    ) -> Result<Option<NormalMap>> {
+        let Some(texture) = self.scene_texture(&n.texture(), scene)? else {
+            return Ok(None);
+        };
         let (transform, set) = match n.extension_value(TRANSFORM) {
             Some(v) => transform_of_json(v)?,
             None => (TexTransform::default(), None),
         };
-        Ok(NormalMap {
+        Ok(Some(NormalMap {
             texture: TextureRef {
                 texture,
                 tex_coord: set.unwrap_or(n.tex_coord()) as usize,
                 transform,
             },
             scale: n.scale(),
-        })
+        }))
     }
 
     /// The alpha mask of material `m` when it is `alphaMode: MASK`: its
@@ -165,18 +192,25 @@ impl<'a> TextureLoader<'a> {
         let pbr = m.pbr_metallic_roughness();
         let cutoff = m.alpha_cutoff().unwrap_or(AlphaMask::DEFAULT_CUTOFF);
         let mask = AlphaMask::new(cutoff, pbr.base_color_factor()[3]);
-        Ok(Some(match pbr.base_color_texture() {
-            Some(info) => mask.with_texture(self.texture_ref(&info, scene)?),
+        let texture = match pbr.base_color_texture() {
+            Some(info) => self.texture_ref(&info, scene)?,
+            None => None,
+        };
+        Ok(Some(match texture {
+            Some(t) => mask.with_texture(t),
             None => mask,
         }))
     }
 
+    /// How `info` reads its texture; `None` when the texture names no image.
     pub(super) fn texture_ref(
         &mut self,
         info: &gltf::texture::Info,
         scene: &mut Scene,
-    ) -> Result<TextureRef> {
-        let index = self.scene_texture(&info.texture(), scene)?;
+    ) -> Result<Option<TextureRef>> {
+        let Some(index) = self.scene_texture(&info.texture(), scene)? else {
+            return Ok(None);
+        };
         let (transform, tex_coord) = match info.texture_transform() {
             Some(x) => (
                 TexTransform {
@@ -188,13 +222,24 @@ impl<'a> TextureLoader<'a> {
             ),
             None => (TexTransform::default(), info.tex_coord()),
         };
-        Ok(TextureRef {
+        Ok(Some(TextureRef {
             texture: index,
             tex_coord: tex_coord as usize,
             transform,
-        })
+        }))
     }
 
+    /// Whether glTF texture `t` names an image. glTF lets a texture leave
+    /// its `source` out when an extension supplies the image; the gltf
+    /// crate then holds `u32::MAX` there, and its `source()` would panic.
+    fn has_source(&self, t: &gltf::Texture) -> bool {
+        self.json
+            .textures
+            .get(t.index())
+            .is_some_and(|j| j.source.value() != NO_SOURCE)
+    }
+
+    /// Decodes the image of `t`, which has one ([`Self::has_source`]).
     fn load(&mut self, t: &gltf::Texture) -> Result<Texture> {
         let image = t.source();
         let what = super::gltf_checks::label("image", image.index(), image.name());
@@ -224,6 +269,9 @@ impl<'a> TextureLoader<'a> {
         }
     }
 }
+
+/// The gltf crate's index for a texture's missing `source`.
+const NO_SOURCE: usize = u32::MAX as usize;
 
 pub(super) fn material_label(m: &gltf::Material) -> String {
     match m.index() {
@@ -370,7 +418,9 @@ pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
     }
     for (i, t) in root.textures.iter().enumerate() {
         let name = label("texture", i, t.name.as_deref());
-        check_index(&name, "image", t.source.value(), root.images.len())?;
+        if t.source.value() != NO_SOURCE {
+            check_index(&name, "image", t.source.value(), root.images.len())?;
+        }
         if let Some(s) = t.sampler {
             check_index(&name, "sampler", s.value(), root.samplers.len())?;
         }

@@ -327,3 +327,33 @@ fn an_image_file_beside_the_scene_is_read_and_one_outside_is_not() {
     let e = Scene::load(&path).unwrap_err().to_string();
     assert!(e.contains("image 0") && e.contains("folder"), "{e}");
 }
+
+#[test]
+fn a_texture_without_an_image_leaves_the_factors_and_a_warning() {
+    // glTF lets a texture leave `source` out when an extension (WebP,
+    // Basis Universal) gives its image; such images are not decoded, so
+    // every map reading it falls back to its factor, with a warning.
+    let mut m = matte(0.7, Some(json!({"index": 0})));
+    m["emissiveTexture"] = json!({"index": 0});
+    m["emissiveFactor"] = json!([0.0, 0.0, 0.0]);
+    m["normalTexture"] = json!({"index": 0});
+    m["alphaMode"] = json!("MASK");
+    let mut doc = floor_scene(Some((&four_colours(), NEAREST_CLAMP)), m, false);
+    doc.textures[0]
+        .as_object_mut()
+        .unwrap()
+        .remove("source")
+        .expect("the texture had a source");
+    let scene = load(&doc);
+    assert!(close(albedo_at(&scene, -1.0, -1.0), Vec3::splat(0.7)));
+    assert!(close(albedo_at(&scene, 1.0, 1.0), Vec3::splat(0.7)));
+    let w = scene.warnings().join("\n");
+    assert_eq!(w.matches("has no `source` image").count(), 1, "{w}");
+    assert!(w.contains("texture 0"), "{w}");
+    // It traces: the floor reflects its factor.
+    let tracer = Tracer::new(scene.commit(&Device::new().unwrap()).unwrap());
+    let run = tracer
+        .trace(&TraceConfig::new(Mode::Classic, Budget::NMax(2000)))
+        .unwrap();
+    assert!(run.report.stored > 0);
+}
