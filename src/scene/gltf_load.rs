@@ -110,7 +110,14 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
         path: PathBuf::new(),
         source: message.into(),
     })?;
-    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(wrap)?;
+    let gltf = match gltf::Gltf::from_slice_without_validation(bytes) {
+        Ok(gltf) => gltf,
+        // A valid file the crate's schema refuses (see gltf_relaxed) reads
+        // once rewritten; any other keeps the crate's own error.
+        Err(e) => super::gltf_relaxed::relaxed(bytes)
+            .and_then(|b| gltf::Gltf::from_slice_without_validation(&b).ok())
+            .ok_or_else(|| wrap(e))?,
+    };
     super::gltf_checks::check_document(gltf.document.as_json())?;
     let buffers = super::buffers::load_buffers(gltf.document.as_json(), gltf.blob.clone(), assets)?;
     super::gltf_data::check_data(gltf.document.as_json(), &buffers)?;

@@ -108,7 +108,10 @@ impl<'a> TextureLoader<'a> {
             return Ok(None);
         }
         let mut load = |info: Option<gltf::texture::Info>| -> Result<Option<TextureRef>> {
-            Ok(info.map(|i| self.texture_ref(&i, scene)).transpose()?.flatten())
+            Ok(info
+                .map(|i| self.texture_ref(&i, scene))
+                .transpose()?
+                .flatten())
         };
         let base_color = load(base)?;
         let metallic_roughness = load(mr)?;

@@ -36,6 +36,9 @@ mod gltf_images;
 mod gltf_load;
 #[cfg(feature = "gltf")]
 mod gltf_quantized;
+// Valid files the gltf crate's schema refuses, rewritten to read.
+#[cfg(feature = "gltf")]
+mod gltf_relaxed;
 #[cfg(feature = "gltf")]
 mod gltf_textures;
 mod light;

@@ -473,3 +473,38 @@ fn the_blender_export_lights_its_floor_and_renders() {
     );
     assert!(image.pixels.iter().all(|p| p.is_finite()));
 }
+
+#[test]
+fn valid_json_the_gltf_crate_is_strict_about_still_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = floor_and_light(dir.path(), false, json!({ "translation": [0.0, 1.0, 0.0] }));
+    let reference = Scene::load(&path).unwrap();
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    // Integers written as floats (JSON has one number type).
+    v["scene"] = json!(0.0);
+    v["nodes"][0]["mesh"] = json!(0.0);
+    v["accessors"][0]["count"] = json!(4e0);
+    // An animation the loader does not read, its target a pointer, not a node.
+    v["animations"] = json!([{"channels": [{"sampler": 0, "target": {"path": "pointer",
+        "extensions": {"KHR_animation_pointer": {"pointer": "/nodes/0/translation"}}}}],
+        "samplers": [{"input": 0, "output": 0}]}]);
+    // A second, empty scene.
+    v["scenes"].as_array_mut().unwrap().push(json!({}));
+    let mut text = b"\xEF\xBB\xBF".to_vec();
+    text.extend_from_slice(v.to_string().as_bytes());
+    std::fs::write(&path, text).unwrap();
+    let relaxed = Scene::load(&path).unwrap();
+    assert_eq!(relaxed.triangle_count(), reference.triangle_count());
+    assert_eq!(relaxed.bounds(), reference.bounds());
+    assert_eq!(relaxed.lights().len(), 1);
+    // What is not valid JSON at all keeps the JSON reader's own message.
+    std::fs::write(&path, b"{\"asset\": ").unwrap();
+    let e = Scene::load(&path).unwrap_err();
+    let source = std::error::Error::source(&e).map(|s| s.to_string());
+    assert!(
+        source
+            .as_deref()
+            .is_some_and(|s| s.contains("EOF while parsing")),
+        "{e}: {source:?}"
+    );
+}
