@@ -6,8 +6,9 @@ use adaptive_pm::emitter::CosN;
 use adaptive_pm::engine::config::{DEFAULT_MAX_DEPTH, DEFAULT_SPLIT_CAP};
 use adaptive_pm::engine::{Budget, Mode, TraceConfig};
 use adaptive_pm::isa::Isa;
-use adaptive_pm::scene::{LoadOptions, Scene};
+use adaptive_pm::scene::{Camera, Light, LoadOptions, PointLight, Scene};
 use anyhow::Context;
+use glam::Vec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -149,18 +150,76 @@ impl EmbreeArgs {
     }
 }
 
-/// Where a glTF scene's external files may be read from.
+/// Where a glTF scene's external files may be read from, and the lights
+/// the command line adds to it.
 #[derive(clap::Args, Debug, Clone, Default)]
-pub struct AssetRootArgs {
+pub struct SceneFileArgs {
     /// Folder the scene's buffers and images may be read from, anywhere
     /// inside it (`../buffers/x.bin`, through symbolic links too), nothing
     /// outside it; it must hold the scene file. Default: the scene file's
     /// folder.
     #[arg(long, value_name = "DIR")]
     pub asset_root: Option<PathBuf>,
+    /// Add an isotropic white point light at X,Y,Z (scene units, glTF's
+    /// +Y up) emitting WATTS in all (repeat the flag for more): most glTF
+    /// models come without a light.
+    #[arg(long = "point-light", value_name = "X,Y,Z,WATTS", value_parser = parse_point_light)]
+    pub point_lights: Vec<PointLightSpec>,
+    /// View from EYE towards TARGET (+Y up) with a vertical field of view
+    /// of VFOV degrees (default 40), instead of the scene's camera. A scene
+    /// without a camera is otherwise seen from its front (+Z), framed whole.
+    #[arg(long, value_name = "EX,EY,EZ,TX,TY,TZ[,VFOV]", value_parser = parse_camera)]
+    pub camera: Option<Camera>,
 }
 
-impl AssetRootArgs {
+fn parse_camera(s: &str) -> Result<Camera, String> {
+    let numbers: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("`{s}`: expected EX,EY,EZ,TX,TY,TZ[,VFOV], finite numbers"))?;
+    let (eye, target, vfov) = match numbers[..] {
+        [ex, ey, ez, tx, ty, tz] => (Vec3::new(ex, ey, ez), Vec3::new(tx, ty, tz), 40.0),
+        [ex, ey, ez, tx, ty, tz, v] => (Vec3::new(ex, ey, ez), Vec3::new(tx, ty, tz), v),
+        _ => {
+            return Err(format!(
+                "`{s}`: expected EX,EY,EZ,TX,TY,TZ[,VFOV], six or seven numbers, got {}",
+                numbers.len()
+            ))
+        }
+    };
+    Camera::look_at(eye, target, Vec3::Y, vfov).map_err(|e| format!("`{s}`: {e}"))
+}
+
+/// A point light given on the command line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLightSpec {
+    pub position: Vec3,
+    pub watts: f32,
+}
+
+fn parse_point_light(s: &str) -> Result<PointLightSpec, String> {
+    let numbers: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("`{s}`: expected X,Y,Z,WATTS, four finite numbers"))?;
+    let [x, y, z, watts] = numbers[..] else {
+        return Err(format!(
+            "`{s}`: expected X,Y,Z,WATTS, four numbers, got {}",
+            numbers.len()
+        ));
+    };
+    if watts <= 0.0 {
+        return Err(format!("`{s}`: the power must be above 0 W, got {watts}"));
+    }
+    Ok(PointLightSpec {
+        position: Vec3::new(x, y, z),
+        watts,
+    })
+}
+
+impl SceneFileArgs {
     /// The load options of these flags.
     pub fn options(&self) -> LoadOptions {
         match &self.asset_root {
@@ -168,21 +227,87 @@ impl AssetRootArgs {
             None => LoadOptions::default(),
         }
     }
+
+    /// Opens a scene by name or path with these flags' asset root and
+    /// lights, unchecked: a scene without a light is returned as it is, to
+    /// be described ([`open_scene`] checks it for tracing).
+    pub fn open(&self, name: &str) -> anyhow::Result<Scene> {
+        let mut scene =
+            Scene::open_with(name, &self.options()).with_context(|| format!("scene `{name}`"))?;
+        for p in &self.point_lights {
+            let intensity = Vec3::splat(p.watts / (4.0 * std::f32::consts::PI));
+            scene
+                .add_light(Light::Point(PointLight {
+                    position: p.position,
+                    intensity,
+                }))
+                .with_context(|| format!("--point-light at {}", p.position))?;
+        }
+        if let Some(camera) = self.camera {
+            scene.set_camera(camera).context("--camera")?;
+        }
+        Ok(scene)
+    }
 }
 
-/// Opens a scene by name or path, with its assets' root and an optional
-/// cos^n override, and prints its warnings.
-pub fn open_scene(name: &str, assets: &AssetRootArgs, cosn: Option<f32>) -> anyhow::Result<Scene> {
-    let mut scene =
-        Scene::open_with(name, &assets.options()).with_context(|| format!("scene `{name}`"))?;
+/// Opens a scene by name or path, with its assets' root, the lights the
+/// command line adds and an optional cos^n override, prints its warnings,
+/// and checks it can be traced.
+pub fn open_scene(name: &str, file: &SceneFileArgs, cosn: Option<f32>) -> anyhow::Result<Scene> {
+    let mut scene = file.open(name)?;
     for w in scene.warnings() {
         eprintln!("warning: scene `{name}`: {w}");
     }
     if let Some(n) = cosn {
         scene.set_cosn(CosN::new(n)?);
     }
+    if scene.lights().is_empty() {
+        anyhow::bail!("{}", no_light_hint(name, &scene));
+    }
     scene.validate()?;
+    if let (None, Some((lo, hi))) = (scene.camera(), scene.geometry_bounds()) {
+        let camera = Camera::framing(lo, hi)?;
+        let (e, f) = (camera.eye, (lo + hi) * 0.5);
+        eprintln!(
+            "note: scene `{name}` has no camera: seen from its front, framed whole \
+             (--camera {},{},{},{},{},{},{})",
+            short(e.x),
+            short(e.y),
+            short(e.z),
+            short(f.x),
+            short(f.y),
+            short(f.z),
+            camera.vfov_deg
+        );
+        scene.set_camera(camera)?;
+    }
     Ok(scene)
+}
+
+/// Why a scene without a light cannot be traced, and a `--point-light`
+/// that would light it: above the middle of its bounds by half their size,
+/// bright enough for about 1 W/m^2 at the middle.
+pub fn no_light_hint(name: &str, scene: &Scene) -> String {
+    let (lo, hi) = scene.geometry_bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+    let size = (hi - lo).max_element().max(1e-3);
+    let centre = (lo + hi) * 0.5;
+    let at = Vec3::new(centre.x, hi.y + 0.5 * size, centre.z);
+    let d = at.distance(centre);
+    let watts = 4.0 * std::f32::consts::PI * d * d;
+    format!(
+        "scene `{name}` has no light: give a material an emissiveFactor or add a \
+         KHR_lights_punctual light, or add one here, for example \
+         --point-light {},{},{},{}",
+        short(at.x),
+        short(at.y),
+        short(at.z),
+        short(watts)
+    )
+}
+
+/// A number in at most 4 significant digits.
+fn short(x: f32) -> String {
+    format!("{}", format!("{x:.4e}").parse::<f32>().unwrap_or(x))
 }
 
 /// A progress bar on a terminal's stderr; hidden otherwise or when `show` is false.

@@ -2,7 +2,7 @@
 //! trace photons, build the maps, render an image (see `adaptive_pm::render`).
 
 use super::common::{
-    open_scene, progress_bar, AssetRootArgs, EmbreeArgs, ThreadArgs, TraceConfigArgs,
+    open_scene, progress_bar, EmbreeArgs, SceneFileArgs, ThreadArgs, TraceConfigArgs,
 };
 use super::render_spp::{first_spp, noise_target, photon_image, Spp, SppOutcome};
 use adaptive_pm::embree::EmbreeScene;
@@ -32,7 +32,7 @@ pub struct RenderArgs {
     /// the room the camera does not see).
     pub scene: String,
     #[command(flatten)]
-    pub assets: AssetRootArgs,
+    pub assets: SceneFileArgs,
     /// classic (Markov chains), density (density control) or adaptive (the paper).
     #[arg(long, default_value = "adaptive")]
     pub mode: Mode,

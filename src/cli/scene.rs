@@ -5,7 +5,7 @@ use adaptive_pm::sampling::luminance;
 use adaptive_pm::scene::{Light, Scene};
 use serde_json::json;
 
-use super::common::AssetRootArgs;
+use super::common::SceneFileArgs;
 
 /// Arguments of `scene`.
 #[derive(clap::Args, Debug)]
@@ -16,7 +16,7 @@ pub struct SceneArgs {
     /// the room the camera does not see).
     pub scene: String,
     #[command(flatten)]
-    pub assets: AssetRootArgs,
+    pub assets: SceneFileArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -114,7 +114,11 @@ fn mask_note(scene: &Scene, material: usize) -> String {
 }
 
 pub fn run(args: SceneArgs) -> anyhow::Result<()> {
-    let scene = Scene::open_with(&args.scene, &args.assets.options())?;
+    let scene = args.assets.open(&args.scene)?;
+    let no_light = scene
+        .lights()
+        .is_empty()
+        .then(|| super::common::no_light_hint(&args.scene, &scene));
     let (lo, hi) = scene.bounds();
     let lights: Vec<_> = scene
         .lights()
@@ -149,7 +153,7 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             "bounds": {"min": [lo.x, lo.y, lo.z], "max": [hi.x, hi.y, hi.z]},
             "camera": scene.camera().map(|c| json!({"eye": [c.eye.x, c.eye.y, c.eye.z], "forward": [c.forward.x, c.forward.y, c.forward.z], "vfov_deg": c.vfov_deg})),
             "skipped_degenerate": scene.skipped_degenerate(),
-            "warnings": scene.warnings(),
+            "warnings": scene.warnings().iter().chain(&no_light).collect::<Vec<_>>(),
         });
         println!("{out}");
         return Ok(());
@@ -162,7 +166,7 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             scene.skipped_degenerate()
         );
     }
-    for w in scene.warnings() {
+    for w in scene.warnings().iter().chain(&no_light) {
         println!("warning    {w}");
     }
     println!("meshes     {}", scene.meshes().len());

@@ -2,7 +2,7 @@
 //! the engine, its counts, its maps' density statistics and timings.
 
 use super::common::{
-    open_scene, progress_bar, AssetRootArgs, EmbreeArgs, ThreadArgs, TraceConfigArgs,
+    open_scene, progress_bar, EmbreeArgs, SceneFileArgs, ThreadArgs, TraceConfigArgs,
 };
 use adaptive_pm::engine::counts::LightPlan;
 use adaptive_pm::engine::{density_points, map_density, primary_density};
@@ -19,7 +19,7 @@ pub struct TraceArgs {
     /// the room the camera does not see).
     pub scene: String,
     #[command(flatten)]
-    pub assets: AssetRootArgs,
+    pub assets: SceneFileArgs,
     /// classic (Markov chains), density (density control) or adaptive (the paper).
     #[arg(long, default_value = "adaptive")]
     pub mode: Mode,

@@ -171,7 +171,9 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
         stack[first_child..].reverse();
     }
     // Nodes are visited depth-first in file order, so mesh (and Embree geometry) ids follow the file.
-    scene.validate()?;
+    // A file without a light loads: lights can be added before tracing,
+    // where `PreparedScene::new` checks for one.
+    scene.check_contents()?;
     Ok(scene)
 }
 

@@ -295,6 +295,22 @@ impl Camera {
             vfov_deg,
         })
     }
+
+    /// A camera that sees the whole box `lo..hi` from its front (glTF's
+    /// +z, +y up), a little above, with a 40-degree vertical field of view:
+    /// the box's bounding sphere fits the view with a tenth to spare, as a
+    /// glTF viewer frames a model that comes without a camera.
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidParameter`] for a box that is not finite.
+    pub fn framing(lo: Vec3, hi: Vec3) -> crate::Result<Self> {
+        const VFOV_DEG: f32 = 40.0;
+        let centre = (lo + hi) * 0.5;
+        let radius = ((hi - lo).length() * 0.5).max(1e-3);
+        let distance = 1.1 * radius / (0.5 * VFOV_DEG).to_radians().sin();
+        let from = Vec3::new(0.0, 0.25, 1.0).normalize();
+        Self::look_at(centre + from * distance, centre, Vec3::Y, VFOV_DEG)
+    }
 }
 
 /// A scene ready to be traced.
@@ -377,10 +393,12 @@ impl Scene {
     /// [`Error::Io`] (with the path) for a file that cannot be read: missing,
     /// unreadable, not a regular file, or over 2 GiB; [`Error::Load`] for a
     /// truncated or malformed one;
-    /// [`Error::InvalidScene`] for NaN or infinite positions, a scene without
-    /// any light, an unsupported primitive, or an external file outside the
+    /// [`Error::InvalidScene`] for NaN or infinite positions, an
+    /// unsupported primitive, or an external file outside the
     /// scene's folder; [`Error::InvalidParameter`] for a negative or NaN
-    /// `cos^n` exponent.
+    /// `cos^n` exponent. A file without a light loads (most glTF models
+    /// have none): give it one with [`Scene::add_light`], as tracing and
+    /// rendering need one ([`Scene::validate`]).
     #[cfg(feature = "gltf")]
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         Self::load_with(path, &LoadOptions::default())
@@ -688,6 +706,11 @@ impl Scene {
         self.meshes.iter().map(|m| m.indices.len()).sum()
     }
 
+    /// Axis-aligned bounds of the meshes alone; `None` without a triangle.
+    pub fn geometry_bounds(&self) -> Option<(Vec3, Vec3)> {
+        self.geometry_bounds
+    }
+
     /// Axis-aligned bounds of all meshes (and point and spot light positions);
     /// `lo` infinite and above `hi` when the scene is empty.
     pub fn bounds(&self) -> (Vec3, Vec3) {
@@ -719,6 +742,19 @@ impl Scene {
                     .into(),
             ));
         }
+        self.check_contents()?;
+        if !self.lights.iter().any(|l| luminance(l.power()) > 0.0) {
+            return Err(Error::InvalidScene(
+                "the scene has no light that emits: every light's power is zero".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// What [`Self::validate`] checks but that the scene has a light that
+    /// emits: a file without one loads (most glTF models have none), so
+    /// that lights can be added with [`Self::add_light`].
+    pub(crate) fn check_contents(&self) -> Result<()> {
         if self.triangle_count() == 0 {
             let directional = self
                 .lights
@@ -750,11 +786,6 @@ impl Scene {
                 checks::MAX_LIGHT_POWER
             )));
         }
-        if !self.lights.iter().any(|l| luminance(l.power()) > 0.0) {
-            return Err(Error::InvalidScene(
-                "the scene has no light that emits: every light's power is zero".into(),
-            ));
-        }
         Ok(())
     }
 
@@ -769,6 +800,30 @@ impl Scene {
 
 #[cfg(test)]
 mod area_tests {
+    #[test]
+    fn framing_sees_every_corner_of_the_box() {
+        use super::Camera;
+        for (lo, hi) in [
+            (Vec3::splat(-0.5), Vec3::splat(0.5)),
+            (Vec3::new(0.0, 0.0, 0.0), Vec3::new(556.0, 548.8, 559.2)),
+            (Vec3::new(-1e3, 0.0, -2.0), Vec3::new(1e3, 0.1, 2.0)),
+        ] {
+            let c = Camera::framing(lo, hi).unwrap();
+            let half = (0.5 * c.vfov_deg).to_radians();
+            for i in 0..8 {
+                let corner = Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                );
+                let to = (corner - c.eye).normalize();
+                // Inside a cone of the vertical half-angle: inside the
+                // (square or wider) image.
+                assert!(to.dot(c.forward) > half.cos(), "{lo} {hi}: corner {corner}");
+            }
+        }
+        assert!(Camera::framing(Vec3::splat(f32::NAN), Vec3::ONE).is_err());
+    }
     use super::*;
 
     /// A 10 x 10 floor of 2 x 1000 x 1000 triangles: 100 exactly (each

@@ -261,3 +261,74 @@ fn render_spp_auto_reports_its_noise_and_refuses_what_cannot_apply() {
         assert!(err.contains(needle), "{args:?}: {err}");
     }
 }
+
+/// `assets/cornell_empty.gltf` without its light and its camera, as most
+/// glTF models come.
+fn bare_model(dir: &std::path::Path) -> String {
+    let asset = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell_empty.gltf");
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(asset).unwrap()).unwrap();
+    for m in v["materials"].as_array_mut().unwrap() {
+        m.as_object_mut().unwrap().remove("emissiveFactor");
+    }
+    v.as_object_mut().unwrap().remove("cameras");
+    for n in v["nodes"].as_array_mut().unwrap() {
+        n.as_object_mut().unwrap().remove("camera");
+    }
+    let path = dir.join("bare.gltf");
+    std::fs::write(&path, v.to_string()).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+#[test]
+fn a_model_without_light_or_camera_is_lit_and_framed_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = bare_model(dir.path());
+    // Described, with the light it lacks as a warning.
+    let v = json(&["scene", &model, "--json"]);
+    assert_eq!(v["lights"].as_array().unwrap().len(), 0);
+    assert!(v["warnings"].to_string().contains("--point-light"), "{v}");
+    // Traced: refused, naming a light that would do.
+    let (code, _, err) = run(&["trace", &model, "-n", "1000"]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains("has no light") && err.contains("--point-light "),
+        "{err}"
+    );
+    let light = ["--point-light", "278,500,279,2e6"];
+    let v = json(&[&["trace", &model, "-n", "2000", "--json"][..], &light].concat());
+    assert!(v["stored"].as_u64().unwrap() > 0, "{v}");
+    // Rendered without a camera: framed whole, and said so.
+    let out = dir.path().join("bare.exr");
+    let args = [
+        &[
+            "render", &model, "-n", "2000", "--spp", "1", "--width", "16", "--height", "16",
+        ][..],
+        &["--out", out.to_str().unwrap(), "--json"],
+        &light,
+    ]
+    .concat();
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("has no camera") && err.contains("--camera "),
+        "{err}"
+    );
+    let camera = ["--camera", "278,273,-800,278,273,0,39.3"];
+    let (code, _, err) = run(&[&args[..], &camera].concat());
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("has no camera"), "{err}");
+    // Bad values are refused by name.
+    for (flag, value, needle) in [
+        ("--point-light", "1,2,3", "four numbers"),
+        ("--point-light", "1,2,3,nan", "finite"),
+        ("--point-light", "1,2,3,0", "above 0 W"),
+        ("--point-light", "1e30,0,0,1", "--point-light"),
+        ("--camera", "0,0,0,0,0,0", "differ"),
+        ("--camera", "0,0,0,1,0,0,180", "field of view"),
+        ("--camera", "0,0,0,1", "six or seven"),
+    ] {
+        let (code, _, err) = run(&["trace", &model, "-n", "1000", flag, value]);
+        assert!(code == 1 || code == 2, "{flag} {value}: {err}");
+        assert!(err.contains(needle), "{flag} {value}: {err}");
+    }
+}

@@ -108,17 +108,32 @@ fn missing_truncated_and_garbage_files_are_errors() {
 }
 
 #[test]
-fn scene_without_light_is_an_error() {
+fn a_scene_without_light_loads_but_does_not_trace_until_it_has_one() {
     let dir = tempfile::tempdir().unwrap();
     let mut doc = cornell_json();
     let light = doc["materials"].as_array_mut().unwrap().last_mut().unwrap();
     light.as_object_mut().unwrap().remove("emissiveFactor");
     let p = write(dir.path(), "dark.gltf", doc.to_string().as_bytes());
-    let e = Scene::load(&p).unwrap_err();
+    let mut scene = Scene::load(&p).unwrap();
+    assert!(scene.lights().is_empty());
+    let e = scene.validate().unwrap_err();
     assert!(
         matches!(e, Error::InvalidScene(_)) && e.to_string().contains("no light"),
         "{e}"
     );
+    let device = adaptive_pm::embree::Device::new().unwrap();
+    let e = scene.clone().commit(&device).unwrap_err();
+    assert!(e.to_string().contains("no light"), "{e}");
+    scene
+        .add_light(adaptive_pm::scene::Light::Point(
+            adaptive_pm::scene::PointLight {
+                position: glam::Vec3::new(278.0, 500.0, 279.0),
+                intensity: glam::Vec3::splat(1e4),
+            },
+        ))
+        .unwrap();
+    scene.validate().unwrap();
+    assert!(scene.commit(&device).is_ok());
 }
 
 #[test]

@@ -3,9 +3,8 @@
 //! ways in one run: raw embree-sys calls, the safe wrapper one ray at a time,
 //! and the wrapper in batches; on one thread and on all threads.
 
-use crate::cli::common::{AssetRootArgs, EmbreeArgs};
+use crate::cli::common::{EmbreeArgs, SceneFileArgs};
 use adaptive_pm::embree::{measure_throughput, Throughput};
-use adaptive_pm::scene::Scene;
 use serde_json::json;
 
 /// The most rays a pass may have.
@@ -17,7 +16,7 @@ pub struct RaysArgs {
     /// A glTF file, or `cornell`.
     pub scene: String,
     #[command(flatten)]
-    pub assets: AssetRootArgs,
+    pub assets: SceneFileArgs,
     /// Rays per pass (at most 2^25: the rays, 32 bytes each, and their
     /// packets stay within about 2 GB).
     #[arg(long, default_value_t = 2_000_000)]
@@ -49,7 +48,7 @@ pub fn run(args: RaysArgs) -> anyhow::Result<()> {
             args.rays
         );
     }
-    let scene = Scene::open_with(&args.scene, &args.assets.options())?;
+    let scene = args.assets.open(&args.scene)?;
     let device = args.embree.device()?;
     let rt = scene.embree_geometry(&device)?;
     let eps = scene.ray_epsilon();

@@ -3,7 +3,7 @@
 //! alone (see `adaptive_pm::experiments::render_study`). Times are from one run on one
 //! thread pool: only their ratios mean anything on a shared machine.
 
-use crate::cli::common::{open_scene, AssetRootArgs, EmbreeArgs, ThreadArgs};
+use crate::cli::common::{open_scene, EmbreeArgs, SceneFileArgs, ThreadArgs};
 use adaptive_pm::engine::{CausticBudget, Mode};
 use adaptive_pm::experiments::render_study::{run_direct_study, run_study, StudyConfig};
 use adaptive_pm::render::{GatherAllocation, GatherDirections, RenderConfig};
@@ -16,7 +16,7 @@ pub struct RenderBenchArgs {
     #[arg(default_value = "cornell")]
     pub scene: String,
     #[command(flatten)]
-    pub assets: AssetRootArgs,
+    pub assets: SceneFileArgs,
     /// Override every area light's cos^n exponent.
     #[arg(long, allow_negative_numbers = true, value_parser = crate::cli::common::parse_finite)]
     pub cosn: Option<f32>,

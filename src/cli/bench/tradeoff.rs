@@ -1,7 +1,7 @@
 //! `adaptive-pm bench tradeoff <SCENE>`: the speed/accuracy trade against a
 //! path-traced reference (see `adaptive_pm::experiments::tradeoff`).
 
-use super::super::common::{open_scene, AssetRootArgs, EmbreeArgs, ThreadArgs};
+use super::super::common::{open_scene, EmbreeArgs, SceneFileArgs, ThreadArgs};
 use adaptive_pm::engine::{Budget, Mode};
 use adaptive_pm::experiments::tradeoff::knob::{choose_quality, Target};
 use adaptive_pm::experiments::tradeoff::output::{summary_text, to_json, write_outputs};
@@ -16,7 +16,7 @@ pub struct TradeoffArgs {
     #[arg(default_value = "cornell")]
     pub scene: String,
     #[command(flatten)]
-    pub assets: AssetRootArgs,
+    pub assets: SceneFileArgs,
     /// N_MAX of each budget level (comma separated).
     #[arg(long, value_delimiter = ',', default_value = "10000,40000,160000")]
     pub n_max: Vec<u64>,
