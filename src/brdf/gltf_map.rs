@@ -44,9 +44,14 @@
 //!   colour channel of 0. The thickness's value is otherwise unused (a ray
 //!   tracer measures the distance travelled).
 //!
+//! A full metal (`metallic = 1`) transmits nothing whatever its
+//! `transmissionFactor`: glTF mixes transmission into the dielectric part
+//! alone (`mix(dielectric, metal, metallic)`), so it is the opaque mapping.
+//!
 //! Not modelled, and refused rather than approximated:
 //! `0 < transmissionFactor < 1` (a mix of glass and the opaque base) and
-//! transmission on a metal (`metallic > 0`). The extensions' textures are
+//! transmission on a partial metal (`0 < metallic < 1`, a mix of glass and
+//! metal). The extensions' textures are
 //! ignored (the opaque materials' base colour and metallic-roughness
 //! textures are read by the scene loader, which maps each point's factors
 //! here).
@@ -181,7 +186,8 @@ pub fn from_gltf_pbr(base_color: Vec3, metallic: f32, roughness: f32) -> Result<
 /// - `thicknessFactor` is negative or not finite, `attenuationDistance` is
 ///   not > 0, or an `attenuationColor` channel is outside [0, 1];
 /// - the material transmits partly (`0 < transmissionFactor < 1`) or is a
-///   transmitting metal (`metallic > 0`): neither is modelled.
+///   transmitting partial metal (`0 < metallic < 1`): neither is modelled
+///   (a full metal transmits nothing: its transmission is ignored).
 pub fn from_gltf_material(m: &GltfMaterial) -> Result<Brdf> {
     let base_color = super::phong::check_rgb01("gltf baseColorFactor", m.base_color)?;
     for (name, v) in [
@@ -211,7 +217,8 @@ pub fn from_gltf_material(m: &GltfMaterial) -> Result<Brdf> {
     let volume = m.volume.unwrap_or_default().check()?;
     let (metallic, roughness) = (m.metallic, m.roughness);
     // IOR 0: the Fresnel term is 1, no light enters, nothing is transmitted.
-    if transmission == 0.0 || ior == 0.0 {
+    // A full metal has no dielectric part to transmit through.
+    if transmission == 0.0 || ior == 0.0 || metallic == 1.0 {
         return opaque(base_color, metallic, roughness, dielectric_f0(ior));
     }
     if transmission < 1.0 {
@@ -345,6 +352,25 @@ mod tests {
     }
 
     #[test]
+    fn a_full_metal_transmits_nothing() {
+        for roughness in [0.0, 0.5] {
+            let metal = GltfMaterial {
+                ior: Some(1.7),
+                ..GltfMaterial::new(Vec3::new(0.9, 0.6, 0.3), 1.0, roughness)
+            };
+            let transmitting = GltfMaterial {
+                transmission: Some(1.0),
+                ..metal
+            };
+            let (a, b) = (
+                from_gltf_material(&metal),
+                from_gltf_material(&transmitting),
+            );
+            assert_eq!(a.unwrap(), b.unwrap(), "roughness {roughness}");
+        }
+    }
+
+    #[test]
     fn full_transmission_is_glass() {
         let Ok(Brdf::Dielectric(d)) = from_gltf_material(&glass(0.0)) else {
             panic!("smooth glass is a dielectric")
@@ -428,7 +454,7 @@ mod tests {
 
     #[test]
     fn bad_factors_are_refused_by_name_and_value() {
-        let cases: [(GltfMaterial, &[&str]); 11] = [
+        let cases: [(GltfMaterial, &[&str]); 10] = [
             (
                 GltfMaterial {
                     transmission: Some(1.5),
@@ -456,13 +482,6 @@ mod tests {
                     ..glass(0.0)
                 },
                 &["transmission on a metal is not modelled", "0.25"],
-            ),
-            (
-                GltfMaterial {
-                    metallic: 1.0,
-                    ..glass(0.0)
-                },
-                &["transmission on a metal"],
             ),
             (
                 GltfMaterial {

@@ -23,7 +23,7 @@
 //!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_transmission`
 //!   (glass) and `KHR_materials_volume` (thin wall or refracting volume,
 //!   absorption); a value outside its range, partial transmission and
-//!   transmission on a metal are refused, naming the material.
+//!   transmission on a partial metal are refused, naming the material.
 //! - Base colour and metallic-roughness textures multiply their factors
 //!   ([`super::gltf_textures`], [`super::textured`]); so does an
 //!   `emissiveTexture` the emission, making an area light whose radiance
