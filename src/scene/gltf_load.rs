@@ -177,6 +177,30 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
     Ok(scene)
 }
 
+/// Warns, once per primitive, of what it holds that changes its look in
+/// glTF but is not read here.
+fn warn_unread(scene: &mut Scene, label: &str, prim: &gltf::Primitive, node: &gltf::Node) {
+    let mut unread = Vec::new();
+    if prim.get(&Semantic::Colors(0)).is_some() {
+        unread.push("vertex colours (COLOR_0, which multiply the base colour) are not read");
+    }
+    if node.skin().is_some() {
+        unread.push(
+            "it is skinned: its vertices are traced as stored, the skin's pose is not applied",
+        );
+    }
+    let weights = node.weights().or(node.mesh().and_then(|m| m.weights()));
+    if prim.morph_targets().len() > 0 && weights.is_some_and(|w| w.iter().any(|&x| x != 0.0)) {
+        unread.push("its morph targets' default weights are not applied");
+    }
+    for what in unread {
+        let message = format!("{label}: {what}");
+        if !scene.warnings.contains(&message) {
+            scene.warnings.push(message);
+        }
+    }
+}
+
 /// One node's meshes, light and camera, in world space `world`.
 fn load_node(
     scene: &mut Scene,
@@ -204,6 +228,7 @@ fn load_node(
                 ));
                 continue;
             }
+            warn_unread(scene, &format!("{mesh_label} primitive {pi}"), &prim, node);
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
             let Some(positions) = prim.get(&Semantic::Positions) else {
                 return Err(Error::InvalidScene(format!(

@@ -296,6 +296,13 @@ fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
             .warnings
             .push(format!("{label}: {what} is not modelled"));
     }
+    // The extensions the loader reads are parsed by the gltf crate; any
+    // other (clearcoat, sheen, specular, unlit, ...) is ignored, and said so.
+    for name in m.extensions().into_iter().flat_map(|e| e.keys()) {
+        scene.warnings.push(format!(
+            "{label}: its extension {name} is not modelled (ignored)"
+        ));
+    }
 }
 
 /// Reads the texture coordinates the mesh's material needs, from primitive
