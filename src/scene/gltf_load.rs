@@ -127,11 +127,14 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
 
     let mut scene = Scene::new();
     let mut material_ids = Vec::with_capacity(doc.materials().len());
+    // The factors of each, for the maps that vertex colours need.
+    let mut material_factors = Vec::with_capacity(doc.materials().len());
     let mut textures = super::gltf_textures::TextureLoader::new(doc.as_json(), &buffers, assets);
     for m in doc.materials() {
         let (material, factors) = convert_material(&m)?;
         let specular = material.brdf.is_specular();
         let id = scene.add_material(material);
+        material_factors.push(factors);
         if let Some(maps) = textures.maps_of(&m, factors, specular, &mut scene)? {
             scene.set_material_maps(id, maps)?;
         }
@@ -156,7 +159,7 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
             &node,
             &world,
             &buffers,
-            &material_ids,
+            (&material_ids, &material_factors),
             &mut default_material,
         )
         .map_err(|e| match e {
@@ -181,9 +184,6 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
 /// glTF but is not read here.
 fn warn_unread(scene: &mut Scene, label: &str, prim: &gltf::Primitive, node: &gltf::Node) {
     let mut unread = Vec::new();
-    if prim.get(&Semantic::Colors(0)).is_some() {
-        unread.push("vertex colours (COLOR_0, which multiply the base colour) are not read");
-    }
     if node.skin().is_some() {
         unread.push(
             "it is skinned: its vertices are traced as stored, the skin's pose is not applied",
@@ -207,7 +207,7 @@ fn load_node(
     node: &gltf::Node,
     world: &Mat4,
     buffers: &[Vec<u8>],
-    material_ids: &[usize],
+    (material_ids, material_factors): (&[usize], &[GltfMaterial]),
     default_material: &mut Option<usize>,
 ) -> Result<()> {
     if !world.is_finite() {
@@ -247,14 +247,14 @@ fn load_node(
             if mirrored {
                 indices.iter_mut().for_each(|t| t.swap(1, 2));
             }
-            let material = match prim.material().index() {
-                Some(i) => material_ids[i],
+            let (material, factors) = match prim.material().index() {
+                Some(i) => (material_ids[i], material_factors[i]),
                 None => match *default_material {
-                    Some(id) => id,
+                    Some(id) => (id, spec_default_factors()),
                     None => {
                         let id = scene.add_material(spec_default_material()?);
                         *default_material = Some(id);
-                        id
+                        (id, spec_default_factors())
                     }
                 },
             };
@@ -277,6 +277,7 @@ fn load_node(
             let prim_label = format!("{mesh_label} primitive {pi}");
             super::gltf_textures::load_texcoords(scene, index, &prim, buffers, &prim_label)?;
             super::gltf_textures::load_tangents(scene, index, &prim, buffers, world)?;
+            load_colors(scene, index, &prim, buffers, factors)?;
         }
     }
     if let Some(light) = node.light() {
@@ -300,8 +301,61 @@ fn load_node(
 
 /// glTF 2.0's default material (§3.9.6), for primitives without one: the
 /// metallic-roughness defaults, a white metal of roughness 1.
+/// The specification's default material's factors: white, metallic 1,
+/// roughness 1.
+fn spec_default_factors() -> GltfMaterial {
+    GltfMaterial::new(Vec3::ONE, 1.0, 1.0)
+}
+
+/// Reads primitive `prim`'s `COLOR_0` (VEC3 or VEC4; alpha unused) into
+/// mesh `mesh`, and gives its material (of glTF factors `factors`) maps
+/// when it has none, so that its hits read the colours. Mirrors and glass
+/// scatter by their factors: their vertex colours are a warning.
+fn load_colors(
+    scene: &mut Scene,
+    mesh: usize,
+    prim: &gltf::Primitive,
+    buffers: &[Vec<u8>],
+    factors: GltfMaterial,
+) -> Result<()> {
+    let Some(accessor) = prim.get(&Semantic::Colors(0)) else {
+        return Ok(());
+    };
+    let material = scene.meshes[mesh].material;
+    if scene.materials[material].brdf.is_specular() {
+        let message = format!(
+            "mesh `{}`: its vertex colours (COLOR_0) are not read: a mirror or glass scatters \
+             by its factors",
+            scene.meshes[mesh].name
+        );
+        scene.warnings.push(message);
+        return Ok(());
+    }
+    let colors: Vec<Vec3> = match accessor.dimensions() {
+        gltf::accessor::Dimensions::Vec4 => read_f32_vectors::<4>(&accessor, buffers)?
+            .into_iter()
+            .map(|[r, g, b, _]| Vec3::new(r, g, b))
+            .collect(),
+        _ => read_f32_vectors::<3>(&accessor, buffers)?
+            .into_iter()
+            .map(Vec3::from)
+            .collect(),
+    };
+    scene.set_vertex_colors(mesh, colors)?;
+    if scene.material_maps(material).is_none() {
+        let maps = super::textured::MaterialMaps {
+            factors,
+            base_color: None,
+            metallic_roughness: None,
+            normal: None,
+        };
+        scene.set_material_maps(material, maps)?;
+    }
+    Ok(())
+}
+
 fn spec_default_material() -> Result<Material> {
-    let brdf = from_gltf_material(&GltfMaterial::new(Vec3::ONE, 1.0, 1.0))
+    let brdf = from_gltf_material(&spec_default_factors())
         .map_err(|e| Error::InvalidScene(format!("the default material: {e}")))?;
     Ok(Material {
         name: "default".into(),

@@ -367,6 +367,7 @@ mod tests {
             material: 0,
             normals: Vec::new(),
             texcoords: Vec::new(),
+            colors: Vec::new(),
             tangents: Vec::new(),
         }
     }

@@ -195,6 +195,10 @@ pub struct Mesh {
     /// Per-vertex texture coordinates by set (`texcoords[n]` is glTF's
     /// `TEXCOORD_n`; empty when absent; [`Scene::set_texcoords`]).
     pub texcoords: Vec<Vec<Vec2>>,
+    /// Per-vertex colours (linear RGB in [0, 1]) that multiply a glTF
+    /// material's base colour (glTF's `COLOR_0`), or empty
+    /// ([`Scene::set_vertex_colors`]).
+    pub colors: Vec<Vec3>,
     /// Tangents (xyz, world space) and handedness (w) by triangle corner,
     /// for a normal texture; empty without one ([`normal_map`]).
     pub tangents: Vec<[Vec4; 3]>,
@@ -524,6 +528,7 @@ impl Scene {
             material,
             normals: Vec::new(),
             texcoords: Vec::new(),
+            colors: Vec::new(),
             tangents: Vec::new(),
         };
         let light = match emission {
@@ -566,6 +571,28 @@ impl Scene {
         } else {
             Vec::new()
         };
+        Ok(())
+    }
+
+    /// Gives mesh `mesh` per-vertex colours (linear RGB, one per vertex)
+    /// that multiply the base colour of its material where it is a glTF
+    /// material with maps ([`Scene::set_material_maps`]; the loader gives
+    /// one to every material a coloured mesh uses), as glTF's `COLOR_0`
+    /// does. Mirrors and glass scatter by their factors.
+    ///
+    /// # Errors
+    /// [`Error::InvalidScene`] for an unknown mesh, a count that is not the
+    /// mesh's vertex count, or a channel outside [0, 1] or NaN.
+    pub fn set_vertex_colors(&mut self, mesh: usize, colors: Vec<Vec3>) -> Result<()> {
+        let m = self.mesh_for_vertex_data(mesh, colors.len(), ("colours", "colours".into()))?;
+        let outside = |c: &Vec3| !(c.min_element() >= 0.0 && c.max_element() <= 1.0);
+        if let Some(i) = colors.iter().position(outside) {
+            return Err(Error::InvalidScene(format!(
+                "mesh `{}` has the vertex colour {} at vertex {i}: channels must be in [0, 1]",
+                m.name, colors[i]
+            )));
+        }
+        m.colors = colors;
         Ok(())
     }
 
@@ -853,6 +880,7 @@ mod area_tests {
             material: 0,
             normals: Vec::new(),
             texcoords: Vec::new(),
+            colors: Vec::new(),
             tangents: Vec::new(),
         };
         assert!((mesh.area() - 100.0).abs() < 1e-3, "{}", mesh.area());

@@ -172,8 +172,9 @@ impl Scene {
         // A point keeps its material's class: the tracer, the renderer and
         // the path tracer decide per material where photons are stored and
         // where paths pass through (module docs).
+        let colour = self.vertex_color(hit);
         let untextured = maps.base_color.is_none() && maps.metallic_roughness.is_none();
-        if own.is_specular() || untextured {
+        if own.is_specular() || (untextured && colour.is_none()) {
             return *own;
         }
         let read = |r: &Option<TextureRef>, e| {
@@ -181,7 +182,8 @@ impl Scene {
                 .and_then(|r| Some(self.textures[r.texture].sample(self.texcoord(hit, r)?, e)))
                 .unwrap_or(Vec4::ONE)
         };
-        let base = read(&maps.base_color, Encoding::Srgb);
+        // glTF's COLOR_0 multiplies the base colour texel.
+        let base = read(&maps.base_color, Encoding::Srgb) * colour.unwrap_or(Vec3::ONE).extend(1.0);
         if maps.metallic_roughness.is_none() {
             // Only the colour varies, and it does not change which model
             // the factors map to (module docs): the material's model with
@@ -204,6 +206,21 @@ impl Scene {
         // Texels are in [0, 1] and the factors were checked: the mapping
         // cannot refuse them, and would fall back to the mean if it did.
         from_gltf_material(&at).unwrap_or(*own)
+    }
+
+    /// The hit mesh's vertex colour at the hit, `None` when it has none.
+    fn vertex_color(&self, hit: &Hit) -> Option<Vec3> {
+        let mesh = self.meshes.get(hit.geom_id as usize)?;
+        if mesh.colors.is_empty() {
+            return None;
+        }
+        let [a, b, c] = *mesh.indices.get(hit.prim_id as usize)?;
+        let (u, v) = (hit.u, hit.v);
+        let colours = &mesh.colors;
+        let colour =
+            colours[a as usize] * (1.0 - u - v) + colours[b as usize] * u + colours[c as usize] * v;
+        // Barycentrics at an edge may round a channel just past [0, 1].
+        Some(colour.clamp(Vec3::ZERO, Vec3::ONE))
     }
 
     /// The transformed texture coordinates `r` reads at a hit, `None` when

@@ -91,6 +91,19 @@ impl Doc {
             json!(self.accessors.len() - 1);
     }
 
+    /// Adds `COLOR_0` to primitive 0 of mesh `mesh`: normalized
+    /// UNSIGNED_BYTE RGBA.
+    pub(crate) fn colors(&mut self, mesh: usize, rgba: &[[u8; 4]]) {
+        let bytes: Vec<u8> = rgba.iter().flatten().copied().collect();
+        let v = self.view(&bytes);
+        self.accessors.push(
+            json!({"bufferView": v, "componentType": 5121, "normalized": true,
+            "count": rgba.len(), "type": "VEC4"}),
+        );
+        self.meshes[mesh]["primitives"][0]["attributes"]["COLOR_0"] =
+            json!(self.accessors.len() - 1);
+    }
+
     /// Adds `TANGENT` values to primitive 0 of mesh `mesh`.
     pub(crate) fn tangents(&mut self, mesh: usize, t: &[[f32; 4]]) {
         let bytes: Vec<u8> = t.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();

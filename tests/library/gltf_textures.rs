@@ -357,3 +357,69 @@ fn a_texture_without_an_image_leaves_the_factors_and_a_warning() {
         .unwrap();
     assert!(run.report.stored > 0);
 }
+
+#[test]
+fn vertex_colours_multiply_the_base_colour_where_a_hit_lands() {
+    let corners = [
+        [255, 0, 0, 255],
+        [0, 255, 0, 255],
+        [0, 0, 255, 255],
+        [255, 255, 255, 0],
+    ];
+    let mut doc = floor_scene(None, matte(0.5, None), false);
+    doc.colors(0, &corners);
+    let scene = load(&doc);
+    let near = |x: f32, z: f32, want: Vec3| {
+        let a = albedo_at(&scene, x, z);
+        assert!(
+            (a - want).abs().max_element() < 0.01,
+            "at ({x}, {z}): {a}, want {want}"
+        );
+    };
+    // Vertex 0 at (-2, -2) is red, 1 at (2, -2) green, 2 at (2, 2) blue,
+    // 3 at (-2, 2) white (its alpha is not read); the factor halves each.
+    near(-1.999, -1.999, Vec3::new(0.5, 0.0, 0.0));
+    near(1.999, -1.999, Vec3::new(0.0, 0.5, 0.0));
+    near(1.999, 1.999, Vec3::new(0.0, 0.0, 0.5));
+    near(-1.999, 1.999, Vec3::splat(0.5));
+    // The diagonal (0 to 2) is shared by both triangles: the mean of its ends.
+    near(0.0, 0.0, Vec3::new(0.25, 0.0, 0.25));
+    assert!(!scene.warnings().join(" ").contains("COLOR_0"));
+    // A colour outside [0, 1] (a float accessor) is refused by name.
+    let mut doc = floor_scene(None, matte(0.5, None), false);
+    doc.colors(0, &corners);
+    let last = doc.accessors.len() - 1;
+    doc.accessors[last]["normalized"] = json!(false);
+    let e = load_err(&doc);
+    assert!(e.contains("vertex colour") && e.contains("[0, 1]"), "{e}");
+}
+
+#[test]
+fn a_floor_of_grey_vertex_colours_reflects_like_the_flat_product() {
+    // Every vertex 128/255 grey, factor 0.8: it reflects like a flat
+    // 0.8 * 128/255, about half what the factor alone would.
+    let grey = 128.0 / 255.0;
+    let mut doc = floor_scene(None, matte(0.8, None), true);
+    doc.colors(0, &[[128, 128, 128, 255]; 4]);
+    let coloured = load(&doc);
+    let flat = load(&floor_scene(None, matte(0.8 * grey, None), true));
+    let factor_only = load(&floor_scene(None, matte(0.8, None), true));
+    let seed = common::seed(43);
+    let (c, c_se) = reflected_up(&coloured, seed);
+    let (f, f_se) = reflected_up(&flat, seed + 1);
+    let (o, o_se) = reflected_up(&factor_only, seed + 2);
+    eprintln!("reflected up: coloured {c} +- {c_se}, flat {f} +- {f_se}, factor {o} +- {o_se}");
+    let se = c_se.hypot(f_se);
+    common::assert_within_noise("coloured vs flat product", c - f, se, 4.0 * se);
+    let scaled_se = (grey as f64 * o_se).hypot(c_se);
+    common::assert_within_noise(
+        "coloured vs the scaled factor",
+        c - grey as f64 * o,
+        scaled_se,
+        4.0 * scaled_se,
+    );
+    assert!(
+        o - c > 10.0 * o_se.hypot(c_se),
+        "the colours are read: {o} vs {c}"
+    );
+}
