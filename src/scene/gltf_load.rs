@@ -48,6 +48,7 @@
 
 use super::assets::AssetRoot;
 use super::gltf_quantized::read_f32_vectors;
+use super::gltf_skin::Skinning;
 use super::{Camera, DirectionalLight, Emission, Light, Material, PointLight, Scene, SpotLight};
 use crate::brdf::gltf_map::{from_gltf_material, GltfMaterial, GltfVolume};
 use crate::emitter::CosN;
@@ -149,6 +150,9 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
     let Some(root) = doc.default_scene().or_else(|| doc.scenes().next()) else {
         return Err(Error::InvalidScene("the glTF file has no scene".into()));
     };
+    // Skinned meshes need their joints' world transforms, wherever in
+    // the scene those nodes are.
+    let worlds = world_transforms(doc, &root);
     let mut stack: Vec<(gltf::Node, Mat4)> = root.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     stack.reverse();
     // The graph is acyclic and its expansion bounded (gltf_checks::check_document).
@@ -158,7 +162,7 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
             &mut scene,
             &node,
             &world,
-            &buffers,
+            (&buffers, &worlds),
             (&material_ids, &material_factors),
             &mut default_material,
         )
@@ -180,14 +184,28 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
     Ok(scene)
 }
 
+/// The world transform of every node of scene `root` (by node index;
+/// `None` for a node outside it). The graph is a forest
+/// (gltf_graph::check_forest).
+fn world_transforms(doc: &gltf::Document, root: &gltf::Scene) -> Vec<Option<Mat4>> {
+    let mut worlds = vec![None; doc.nodes().len()];
+    let mut stack: Vec<(gltf::Node, Mat4)> = root.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        worlds[node.index()] = Some(world);
+        stack.extend(node.children().map(|c| (c, world)));
+    }
+    worlds
+}
+
 /// Warns, once per primitive, of what it holds that changes its look in
 /// glTF but is not read here.
 fn warn_unread(scene: &mut Scene, label: &str, prim: &gltf::Primitive, node: &gltf::Node) {
     let mut unread = Vec::new();
-    if node.skin().is_some() {
-        unread.push(
-            "it is skinned: its vertices are traced as stored, the skin's pose is not applied",
-        );
+    let weighted =
+        prim.get(&Semantic::Joints(0)).is_some() && prim.get(&Semantic::Weights(0)).is_some();
+    if node.skin().is_some() && !weighted {
+        unread.push("it has a skin but no JOINTS_0 and WEIGHTS_0: it is placed by its node");
     }
     let weights = node.weights().or(node.mesh().and_then(|m| m.weights()));
     if prim.morph_targets().len() > 0 && weights.is_some_and(|w| w.iter().any(|&x| x != 0.0)) {
@@ -206,7 +224,7 @@ fn load_node(
     scene: &mut Scene,
     node: &gltf::Node,
     world: &Mat4,
-    buffers: &[Vec<u8>],
+    (buffers, worlds): (&[Vec<u8>], &[Option<Mat4>]),
     (material_ids, material_factors): (&[usize], &[GltfMaterial]),
     default_material: &mut Option<usize>,
 ) -> Result<()> {
@@ -217,9 +235,6 @@ fn load_node(
     }
     if let Some(mesh) = node.mesh() {
         let mesh_label = super::gltf_checks::label("mesh", mesh.index(), mesh.name());
-        // glTF 2.0 §3.7.4: a negative determinant mirrors the node, which
-        // reverses its triangles' winding (and so their front side).
-        let mirrored = glam::Mat3::from_mat4(*world).determinant() < 0.0;
         for (pi, prim) in mesh.primitives().enumerate() {
             if !is_triangles(prim.mode()) {
                 scene.warnings.push(format!(
@@ -235,10 +250,34 @@ fn load_node(
                     "{mesh_label} primitive {pi} has no POSITION attribute"
                 )));
             };
-            let positions: Vec<Vec3> = read_f32_vectors::<3>(&positions, buffers)?
+            // A skinned mesh is posed by its joints and ignores its node's
+            // transform (glTF 2.0 §3.7.3.3).
+            let skinning = match node.skin() {
+                Some(skin) => Skinning::of(&skin, &prim, buffers, worlds)?,
+                None => None,
+            };
+            let positions = read_f32_vectors::<3>(&positions, buffers)?;
+            if let Some(s) = skinning.as_ref().filter(|s| s.len() != positions.len()) {
+                return Err(Error::InvalidScene(format!(
+                    "{mesh_label} primitive {pi} has {} positions but {} joint weights",
+                    positions.len(),
+                    s.len()
+                )));
+            }
+            let positions: Vec<Vec3> = positions
                 .into_iter()
-                .map(|p| world.transform_point3(Vec3::from(p)))
+                .enumerate()
+                .map(|(v, p)| match &skinning {
+                    Some(s) => s.point(v, Vec3::from(p)),
+                    None => world.transform_point3(Vec3::from(p)),
+                })
                 .collect();
+            // glTF 2.0 §3.7.4: a negative determinant mirrors the node, which
+            // reverses its triangles' winding (and so their front side).
+            let mirrored = match &skinning {
+                Some(s) => s.mirrors(),
+                None => glam::Mat3::from_mat4(*world).determinant() < 0.0,
+            };
             let flat: Vec<u32> = match reader.read_indices() {
                 Some(i) => i.into_u32().collect(),
                 None => (0..positions.len() as u32).collect(),
@@ -266,7 +305,11 @@ fn load_node(
             };
             let normals: Option<Vec<Vec3>> = normals.map(|n| {
                 n.into_iter()
-                    .map(|v| normal_matrix.transform_vector3(Vec3::from(v)))
+                    .enumerate()
+                    .map(|(i, v)| match &skinning {
+                        Some(s) if i < s.len() => s.normal(i, Vec3::from(v)),
+                        _ => normal_matrix.transform_vector3(Vec3::from(v)),
+                    })
                     .collect()
             });
             let name = format!("{}#{pi}", mesh.name().unwrap_or("mesh"));
@@ -276,7 +319,9 @@ fn load_node(
             }
             let prim_label = format!("{mesh_label} primitive {pi}");
             super::gltf_textures::load_texcoords(scene, index, &prim, buffers, &prim_label)?;
-            super::gltf_textures::load_tangents(scene, index, &prim, buffers, world)?;
+            // A posed mesh's tangents are generated from its posed vertices.
+            let tangent_space = skinning.is_none().then_some(world);
+            super::gltf_textures::load_tangents(scene, index, &prim, buffers, tangent_space)?;
             load_colors(scene, index, &prim, buffers, factors)?;
         }
     }

@@ -352,19 +352,21 @@ pub(super) fn load_texcoords(
 /// Gives mesh `mesh` of `scene` the tangents its material's normal texture
 /// needs: primitive `prim`'s `TANGENT`s in world space `world` (the
 /// handedness flips with a mirroring transform, as the bitangent must
-/// follow the mirrored surface), else MikkTSpace's.
+/// follow the mirrored surface), else MikkTSpace's (always for a skinned
+/// mesh, `world` `None`: its posed vertices give them).
 pub(super) fn load_tangents(
     scene: &mut Scene,
     mesh: usize,
     prim: &gltf::Primitive,
     buffers: &[Vec<u8>],
-    world: &glam::Mat4,
+    world: Option<&glam::Mat4>,
 ) -> Result<()> {
     let material = scene.meshes[mesh].material;
     let Some(map) = scene.material_maps(material).and_then(|m| m.normal) else {
         return Ok(());
     };
-    let Some(accessor) = prim.get(&gltf::mesh::Semantic::Tangents) else {
+    let file_tangents = world.and_then(|w| Some((w, prim.get(&gltf::mesh::Semantic::Tangents)?)));
+    let Some((world, accessor)) = file_tangents else {
         // A valid file may have texture coordinates that give no tangent
         // (all equal): it loads, shaded with its unbent normals.
         if let Err(e) = scene.generate_tangents(mesh, map.texture.tex_coord) {

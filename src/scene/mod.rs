@@ -39,6 +39,9 @@ mod gltf_quantized;
 // Valid files the gltf crate's schema refuses, rewritten to read.
 #[cfg(feature = "gltf")]
 mod gltf_relaxed;
+// A skinned mesh posed by its joints.
+#[cfg(feature = "gltf")]
+mod gltf_skin;
 #[cfg(feature = "gltf")]
 mod gltf_textures;
 mod light;

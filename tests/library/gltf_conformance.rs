@@ -10,7 +10,7 @@ use adaptive_pm::embree::Device;
 use adaptive_pm::engine::{Budget, Mode, TraceConfig, Tracer};
 use adaptive_pm::rng::Rng;
 use adaptive_pm::scene::{Light, Scene};
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 use serde_json::{json, Value};
 use std::path::PathBuf;
 
@@ -533,4 +533,85 @@ fn what_changes_a_models_look_but_is_not_read_is_a_warning() {
     std::fs::write(&path, v.to_string()).unwrap();
     let w = Scene::load(&path).unwrap().warnings().join("\n");
     assert!(!w.contains("morph"), "{w}");
+}
+
+#[test]
+fn a_skinned_mesh_stands_where_its_joints_put_it() {
+    // The floor square's vertices 0 and 1 hang from joint A (raised by 1),
+    // 2 and 3 half from A and half from B (raised by 2): at rest they sit at
+    // y = 1 and y = 1.5, wherever the mesh's own node is (it is ignored).
+    let mut doc = Doc::default();
+    let (white, lamp) = (white(&mut doc), lamp(&mut doc, false));
+    let (p, i) = square(2.0, true);
+    let floor = doc.mesh(&p, &i, 4, Some(white));
+    let joints: Vec<u8> = [[0u8, 0, 0, 0], [0, 0, 0, 0], [0, 1, 0, 0], [0, 1, 0, 0]].concat();
+    let weights: Vec<u8> = [
+        [1.0f32, 0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0, 0.0],
+        [0.5, 0.5, 0.0, 0.0],
+        [0.5, 0.5, 0.0, 0.0],
+    ]
+    .iter()
+    .flatten()
+    .flat_map(|w| w.to_le_bytes())
+    .collect();
+    // Joint B's inverse bind undoes a bind pose 10 along x: at rest B sits
+    // at (10, 2, 0), so B's matrix is a translation by (0, 2, 0).
+    let inverse_binds: Vec<u8> = [
+        Mat4::IDENTITY,
+        Mat4::from_translation(Vec3::new(-10.0, 0.0, 0.0)),
+    ]
+    .iter()
+    .flat_map(|m| m.to_cols_array())
+    .flat_map(|f| f.to_le_bytes())
+    .collect();
+    let (vj, vw, vb) = (
+        doc.view(&joints),
+        doc.view(&weights),
+        doc.view(&inverse_binds),
+    );
+    doc.accessors
+        .push(json!({"bufferView": vj, "componentType": 5121, "count": 4, "type": "VEC4"}));
+    doc.accessors
+        .push(json!({"bufferView": vw, "componentType": 5126, "count": 4, "type": "VEC4"}));
+    doc.accessors
+        .push(json!({"bufferView": vb, "componentType": 5126, "count": 2, "type": "MAT4"}));
+    let n = doc.accessors.len();
+    let attributes = &mut doc.meshes[floor]["primitives"][0]["attributes"];
+    attributes["JOINTS_0"] = json!(n - 3);
+    attributes["WEIGHTS_0"] = json!(n - 2);
+    // The mesh's node is moved, which a skinned mesh ignores (the
+    // validator warns of it); the joints share a root, as it requires.
+    doc.node(json!({"mesh": floor, "skin": 0, "translation": [100.0, 0.0, 0.0]}));
+    doc.node(json!({"name": "A", "translation": [0.0, 1.0, 0.0]}));
+    doc.node(json!({"name": "B", "translation": [10.0, 2.0, 0.0]}));
+    doc.node(json!({"name": "armature", "children": [1, 2]}));
+    doc.skins
+        .push(json!({"joints": [1, 2], "inverseBindMatrices": n - 1}));
+    let (p, i) = square(0.25, false);
+    let light = doc.mesh(&p, &i, 4, Some(lamp));
+    doc.node(json!({"mesh": light, "translation": [0.0, 3.0, 0.0]}));
+    doc.roots = Some(vec![0, 3, 4]);
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Scene::load(doc.write(dir.path())).unwrap();
+    let floor = &scene.meshes()[0];
+    let want = [
+        Vec3::new(-2.0, 1.0, -2.0),
+        Vec3::new(2.0, 1.0, -2.0),
+        Vec3::new(2.0, 1.5, 2.0),
+        Vec3::new(-2.0, 1.5, 2.0),
+    ];
+    for (got, want) in floor.positions.iter().zip(want) {
+        assert!((*got - want).length() < 1e-5, "{got} != {want}");
+    }
+    assert!(
+        !scene.warnings().join(" ").contains("skin"),
+        "{:?}",
+        scene.warnings()
+    );
+    // A joint index past the skin's joints is refused by name.
+    doc.skins[0]["joints"] = json!([1]);
+    doc.accessors[n - 1]["count"] = json!(1);
+    let e = Scene::load(doc.write(dir.path())).unwrap_err().to_string();
+    assert!(e.contains("skin 0") && e.contains("joint 1"), "{e}");
 }

@@ -20,6 +20,9 @@ pub(crate) struct Doc {
     pub(crate) images: Vec<Value>,
     pub(crate) textures: Vec<Value>,
     pub(crate) samplers: Vec<Value>,
+    pub(crate) skins: Vec<Value>,
+    /// The scene's root nodes; `None`: every node is a root.
+    pub(crate) roots: Option<Vec<usize>>,
     pub(crate) extensions_used: Vec<&'static str>,
 }
 
@@ -143,7 +146,7 @@ impl Doc {
         );
         let mut doc = json!({
             "asset": {"version": "2.0"}, "scene": 0,
-            "scenes": [{"nodes": (0..self.nodes.len()).collect::<Vec<_>>()}],
+            "scenes": [{"nodes": self.roots.clone().unwrap_or_else(|| (0..self.nodes.len()).collect())}],
             "nodes": self.nodes, "meshes": self.meshes, "materials": self.materials,
             "accessors": self.accessors, "bufferViews": self.views,
             "buffers": [{"byteLength": self.bin.len(), "uri": uri}],
@@ -152,6 +155,7 @@ impl Doc {
             ("images", &self.images),
             ("textures", &self.textures),
             ("samplers", &self.samplers),
+            ("skins", &self.skins),
         ] {
             if !list.is_empty() {
                 doc[key] = json!(list);
