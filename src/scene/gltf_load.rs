@@ -54,7 +54,7 @@ use crate::brdf::gltf_map::{from_gltf_material, GltfMaterial, GltfVolume};
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec3};
-use gltf::mesh::Semantic;
+use gltf::mesh::{MorphTarget, Semantic};
 use std::path::{Path, PathBuf};
 
 /// How [`Scene::load_with`] reads a glTF file.
@@ -184,6 +184,46 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
     Ok(scene)
 }
 
+/// Adds to `values` (a primitive's POSITION or NORMAL) the displacements
+/// of its morph targets that `attribute` picks, times the default weights:
+/// the node's `weights`, else the mesh's (glTF 2.0 §3.7.2.2). Animations,
+/// which would change the weights, are not read.
+fn morph<'a>(
+    values: &mut [[f32; 3]],
+    prim: &gltf::Primitive<'a>,
+    node: &gltf::Node,
+    buffers: &[Vec<u8>],
+    attribute: fn(&MorphTarget<'a>) -> Option<gltf::Accessor<'a>>,
+) -> Result<()> {
+    let Some(weights) = node.weights().or(node.mesh().and_then(|m| m.weights())) else {
+        return Ok(());
+    };
+    for (target, &w) in prim.morph_targets().zip(weights) {
+        let Some(accessor) = attribute(&target).filter(|_| w != 0.0) else {
+            continue;
+        };
+        let displacements = read_f32_vectors::<3>(&accessor, buffers)?;
+        if displacements.len() != values.len() {
+            return Err(Error::InvalidScene(format!(
+                "a morph target has {} displacements for {} vertices",
+                displacements.len(),
+                values.len()
+            )));
+        }
+        if !w.is_finite() {
+            return Err(Error::InvalidScene(format!(
+                "a morph target's weight {w} is not finite"
+            )));
+        }
+        for (v, d) in values.iter_mut().zip(displacements) {
+            for k in 0..3 {
+                v[k] += w * d[k];
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The world transform of every node of scene `root` (by node index;
 /// `None` for a node outside it). The graph is a forest
 /// (gltf_graph::check_forest).
@@ -206,10 +246,6 @@ fn warn_unread(scene: &mut Scene, label: &str, prim: &gltf::Primitive, node: &gl
         prim.get(&Semantic::Joints(0)).is_some() && prim.get(&Semantic::Weights(0)).is_some();
     if node.skin().is_some() && !weighted {
         unread.push("it has a skin but no JOINTS_0 and WEIGHTS_0: it is placed by its node");
-    }
-    let weights = node.weights().or(node.mesh().and_then(|m| m.weights()));
-    if prim.morph_targets().len() > 0 && weights.is_some_and(|w| w.iter().any(|&x| x != 0.0)) {
-        unread.push("its morph targets' default weights are not applied");
     }
     for what in unread {
         let message = format!("{label}: {what}");
@@ -256,7 +292,8 @@ fn load_node(
                 Some(skin) => Skinning::of(&skin, &prim, buffers, worlds)?,
                 None => None,
             };
-            let positions = read_f32_vectors::<3>(&positions, buffers)?;
+            let mut positions = read_f32_vectors::<3>(&positions, buffers)?;
+            morph(&mut positions, &prim, node, buffers, MorphTarget::positions)?;
             if let Some(s) = skinning.as_ref().filter(|s| s.len() != positions.len()) {
                 return Err(Error::InvalidScene(format!(
                     "{mesh_label} primitive {pi} has {} positions but {} joint weights",
@@ -300,7 +337,11 @@ fn load_node(
             // NORMAL: shading normals, by the inverse transpose of the node's matrix.
             let normal_matrix = world.inverse().transpose();
             let normals = match prim.get(&Semantic::Normals) {
-                Some(n) => Some(read_f32_vectors::<3>(&n, buffers)?),
+                Some(n) => {
+                    let mut n = read_f32_vectors::<3>(&n, buffers)?;
+                    morph(&mut n, &prim, node, buffers, MorphTarget::normals)?;
+                    Some(n)
+                }
                 None => None,
             };
             let normals: Option<Vec<Vec3>> = normals.map(|n| {
