@@ -172,12 +172,16 @@ pub struct SceneFileArgs {
     pub camera: Option<Camera>,
 }
 
-fn parse_camera(s: &str) -> Result<Camera, String> {
-    let numbers: Vec<f32> = s
-        .split(',')
+/// A comma-separated list of finite numbers, `form` naming it in errors.
+fn finite_numbers(s: &str, form: &str) -> Result<Vec<f32>, String> {
+    s.split(',')
         .map(|x| x.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
         .collect::<Option<_>>()
-        .ok_or_else(|| format!("`{s}`: expected EX,EY,EZ,TX,TY,TZ[,VFOV], finite numbers"))?;
+        .ok_or_else(|| format!("`{s}`: expected {form}, finite numbers"))
+}
+
+fn parse_camera(s: &str) -> Result<Camera, String> {
+    let numbers = finite_numbers(s, "EX,EY,EZ,TX,TY,TZ[,VFOV]")?;
     let (eye, target, vfov) = match numbers[..] {
         [ex, ey, ez, tx, ty, tz] => (Vec3::new(ex, ey, ez), Vec3::new(tx, ty, tz), 40.0),
         [ex, ey, ez, tx, ty, tz, v] => (Vec3::new(ex, ey, ez), Vec3::new(tx, ty, tz), v),
@@ -199,11 +203,7 @@ pub struct PointLightSpec {
 }
 
 fn parse_point_light(s: &str) -> Result<PointLightSpec, String> {
-    let numbers: Vec<f32> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
-        .collect::<Option<_>>()
-        .ok_or_else(|| format!("`{s}`: expected X,Y,Z,WATTS, four finite numbers"))?;
+    let numbers = finite_numbers(s, "X,Y,Z,WATTS")?;
     let [x, y, z, watts] = numbers[..] else {
         return Err(format!(
             "`{s}`: expected X,Y,Z,WATTS, four numbers, got {}",
