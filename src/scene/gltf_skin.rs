@@ -15,16 +15,20 @@ use glam::{Mat3, Mat4, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Semantic;
 
-/// One matrix per vertex, blended from its joints' matrices.
+/// A primitive's joints and weights, and its skin's joint matrices: each
+/// vertex's matrix is blended when asked for (stored, one 64-byte matrix a
+/// vertex would be five times the positions' memory).
 pub(super) struct Skinning {
-    matrices: Vec<Mat4>,
+    joint_matrices: Vec<Mat4>,
+    joints: Vec<[f32; 4]>,
+    weights: Vec<[f32; 4]>,
 }
 
 impl Skinning {
-    /// The rest-pose matrices of primitive `prim` of a mesh skinned by
-    /// `skin`, whose nodes' world transforms are `worlds` (by node index;
-    /// `None` for a node outside the scene); `Ok(None)` when the primitive
-    /// has no `JOINTS_0`/`WEIGHTS_0`.
+    /// The rest pose of primitive `prim` of a mesh skinned by `skin`, whose
+    /// nodes' world transforms are `worlds` (by node index; `None` for a
+    /// node outside the scene); `Ok(None)` when the primitive has no
+    /// `JOINTS_0`/`WEIGHTS_0`.
     pub(super) fn of(
         skin: &gltf::Skin,
         prim: &gltf::Primitive,
@@ -49,7 +53,6 @@ impl Skinning {
                 weights.len()
             )));
         }
-        let mut matrices = Vec::with_capacity(joints.len());
         for (v, (j, w)) in joints.iter().zip(&weights).enumerate() {
             let total: f32 = w.iter().sum();
             if !(total.is_finite() && total > 0.0 && w.iter().all(|&x| x >= 0.0)) {
@@ -57,48 +60,59 @@ impl Skinning {
                     "vertex {v} has the weights {w:?}: they must be finite, non-negative and not all 0"
                 )));
             }
-            let mut m = Mat4::ZERO;
-            for (&joint, &weight) in j.iter().zip(w) {
-                if weight == 0.0 {
-                    continue;
-                }
-                // JOINTS_0 holds small unsigned integers (read exactly as floats).
-                let matrix = joint_matrices.get(joint as usize).ok_or_else(|| {
-                    bad(format!(
-                        "vertex {v} names joint {joint}, but the skin has {}",
-                        joint_matrices.len()
-                    ))
-                })?;
-                // Weights are meant to sum to 1; dividing keeps a rounded
-                // sum from scaling the vertex.
-                m += *matrix * (weight / total);
+            // JOINTS_0 holds small unsigned integers, read exactly as floats.
+            let unknown = j.iter().zip(w).find(|&(&joint, &weight)| {
+                weight > 0.0
+                    && !(joint >= 0.0
+                        && joint.fract() == 0.0
+                        && (joint as usize) < joint_matrices.len())
+            });
+            if let Some((joint, _)) = unknown {
+                return Err(bad(format!(
+                    "vertex {v} names joint {joint}, but the skin has {}",
+                    joint_matrices.len()
+                )));
             }
-            matrices.push(m);
         }
-        Ok(Some(Skinning { matrices }))
+        Ok(Some(Skinning {
+            joint_matrices,
+            joints,
+            weights,
+        }))
     }
 
     /// The vertex count the primitive's attributes must have.
     pub(super) fn len(&self) -> usize {
-        self.matrices.len()
+        self.joints.len()
+    }
+
+    /// Vertex `v`'s matrix: its joints' matrices by its weights, divided by
+    /// their sum (meant to be 1; a rounded sum must not scale the vertex).
+    fn matrix(&self, v: usize) -> Mat4 {
+        let (j, w) = (self.joints[v], self.weights[v]);
+        let total: f32 = w.iter().sum();
+        j.iter()
+            .zip(w)
+            .filter(|&(_, weight)| weight > 0.0)
+            .fold(Mat4::ZERO, |m, (&joint, weight)| {
+                m + self.joint_matrices[joint as usize] * (weight / total)
+            })
     }
 
     /// Position `p` of vertex `v`, posed.
     pub(super) fn point(&self, v: usize, p: Vec3) -> Vec3 {
-        self.matrices[v].transform_point3(p)
+        self.matrix(v).transform_point3(p)
     }
 
     /// Normal `n` of vertex `v`, posed (by the inverse transpose).
     pub(super) fn normal(&self, v: usize, n: Vec3) -> Vec3 {
-        Mat3::from_mat4(self.matrices[v]).inverse().transpose() * n
+        Mat3::from_mat4(self.matrix(v)).inverse().transpose() * n
     }
 
     /// Whether the pose mirrors the mesh (a negative determinant at its
     /// first vertex), which reverses its winding as a node's would.
     pub(super) fn mirrors(&self) -> bool {
-        self.matrices
-            .first()
-            .is_some_and(|m| Mat3::from_mat4(*m).determinant() < 0.0)
+        self.len() > 0 && Mat3::from_mat4(self.matrix(0)).determinant() < 0.0
     }
 }
 
