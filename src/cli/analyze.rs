@@ -14,7 +14,7 @@ use adaptive_pm::brdf::{Brdf, CookTorrance, GltfPbr, Lambert, Mirror, Phong};
 use adaptive_pm::emitter::CosN;
 use adaptive_pm::scene::{Light, LoadOptions, Scene};
 
-use super::common::SceneFileArgs;
+use super::common::AssetRootArgs;
 use anyhow::{bail, Context};
 use glam::Vec3;
 
@@ -25,7 +25,7 @@ pub struct AnalyzeArgs {
     /// `cornell-glass`, `door`) whose emitters and BRDFs to analyse.
     pub scene: Option<String>,
     #[command(flatten)]
-    pub assets: SceneFileArgs,
+    pub assets: AssetRootArgs,
     /// `cos^n` emitters to analyse, by exponent.
     #[arg(long, value_delimiter = ',')]
     pub cosn: Vec<f32>,

@@ -150,16 +150,34 @@ impl EmbreeArgs {
     }
 }
 
-/// Where a glTF scene's external files may be read from, and the lights
-/// the command line adds to it.
+/// Where a glTF scene's external files may be read from.
 #[derive(clap::Args, Debug, Clone, Default)]
-pub struct SceneFileArgs {
+pub struct AssetRootArgs {
     /// Folder the scene's buffers and images may be read from, anywhere
     /// inside it (`../buffers/x.bin`, through symbolic links too), nothing
     /// outside it; it must hold the scene file. Default: the scene file's
     /// folder.
     #[arg(long, value_name = "DIR")]
     pub asset_root: Option<PathBuf>,
+}
+
+impl AssetRootArgs {
+    /// The load options of this flag.
+    pub fn options(&self) -> LoadOptions {
+        match &self.asset_root {
+            Some(dir) => LoadOptions::default().with_asset_root(dir),
+            None => LoadOptions::default(),
+        }
+    }
+}
+
+/// Where a glTF scene's external files may be read from, and the light and
+/// the view the command line adds to it (for the commands that trace or
+/// render it).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct SceneFileArgs {
+    #[command(flatten)]
+    pub root: AssetRootArgs,
     /// Add an isotropic white point light at X,Y,Z (scene units, glTF's
     /// +Y up) emitting WATTS in all (repeat the flag for more): most glTF
     /// models come without a light.
@@ -222,10 +240,7 @@ fn parse_point_light(s: &str) -> Result<PointLightSpec, String> {
 impl SceneFileArgs {
     /// The load options of these flags.
     pub fn options(&self) -> LoadOptions {
-        match &self.asset_root {
-            Some(dir) => LoadOptions::default().with_asset_root(dir),
-            None => LoadOptions::default(),
-        }
+        self.root.options()
     }
 
     /// Opens a scene by name or path with these flags' asset root and

@@ -4,7 +4,7 @@
 //! empty box), written as CSV files, SVG/PNG figures and `claims.md`, with
 //! the paper's claims checked in a table.
 
-use crate::cli::common::{parse_estimator, EmbreeArgs, SceneFileArgs, ThreadArgs};
+use crate::cli::common::{parse_estimator, AssetRootArgs, EmbreeArgs, ThreadArgs};
 use adaptive_pm::analysis::Estimator;
 use adaptive_pm::engine::config::DEFAULT_MAX_DEPTH;
 use adaptive_pm::engine::Mode;
@@ -27,7 +27,7 @@ pub struct CornellArgs {
     #[arg(long, default_value = adaptive_pm::scene::BUILTIN_CORNELL_EMPTY)]
     pub scene: String,
     #[command(flatten)]
-    pub assets: SceneFileArgs,
+    pub assets: AssetRootArgs,
     /// Light exponents n: A..B (inclusive), A..B:STEP, or a list a,b,c.
     #[arg(long, default_value = "1..200")]
     pub n_sweep: String,
