@@ -238,17 +238,12 @@ fn parse_point_light(s: &str) -> Result<PointLightSpec, String> {
 }
 
 impl SceneFileArgs {
-    /// The load options of these flags.
-    pub fn options(&self) -> LoadOptions {
-        self.root.options()
-    }
-
     /// Opens a scene by name or path with these flags' asset root and
     /// lights, unchecked: a scene without a light is returned as it is, to
     /// be described ([`open_scene`] checks it for tracing).
     pub fn open(&self, name: &str) -> anyhow::Result<Scene> {
-        let mut scene =
-            Scene::open_with(name, &self.options()).with_context(|| format!("scene `{name}`"))?;
+        let mut scene = Scene::open_with(name, &self.root.options())
+            .with_context(|| format!("scene `{name}`"))?;
         for p in &self.point_lights {
             let intensity = Vec3::splat(p.watts / (4.0 * std::f32::consts::PI));
             scene

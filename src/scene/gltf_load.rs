@@ -48,7 +48,7 @@
 
 use super::assets::AssetRoot;
 use super::gltf_quantized::read_f32_vectors;
-use super::gltf_skin::Skinning;
+use super::gltf_skin::{JointMatrices, Skinning};
 use super::{Camera, DirectionalLight, Emission, Light, Material, PointLight, Scene, SpotLight};
 use crate::brdf::gltf_map::{from_gltf_material, GltfMaterial, GltfVolume};
 use crate::emitter::CosN;
@@ -238,20 +238,11 @@ fn world_transforms(doc: &gltf::Document, root: &gltf::Scene) -> Vec<Option<Mat4
     worlds
 }
 
-/// Warns, once per primitive, of what it holds that changes its look in
-/// glTF but is not read here.
-fn warn_unread(scene: &mut Scene, label: &str, prim: &gltf::Primitive, node: &gltf::Node) {
-    let mut unread = Vec::new();
-    let weighted =
-        prim.get(&Semantic::Joints(0)).is_some() && prim.get(&Semantic::Weights(0)).is_some();
-    if node.skin().is_some() && !weighted {
-        unread.push("it has a skin but no JOINTS_0 and WEIGHTS_0: it is placed by its node");
-    }
-    for what in unread {
-        let message = format!("{label}: {what}");
-        if !scene.warnings.contains(&message) {
-            scene.warnings.push(message);
-        }
+/// Adds `message` to the scene's warnings unless it is there: a mesh that
+/// several nodes instance warns once.
+fn warn_once(scene: &mut Scene, message: String) {
+    if !scene.warnings.contains(&message) {
+        scene.warnings.push(message);
     }
 }
 
@@ -271,6 +262,12 @@ fn load_node(
     }
     if let Some(mesh) = node.mesh() {
         let mesh_label = super::gltf_checks::label("mesh", mesh.index(), mesh.name());
+        // A skinned mesh is posed by its joints and ignores its node's
+        // transform (glTF 2.0 §3.7.3.3).
+        let skin = match node.skin() {
+            Some(s) => Some(JointMatrices::of(&s, buffers, worlds)?),
+            None => None,
+        };
         for (pi, prim) in mesh.primitives().enumerate() {
             if !is_triangles(prim.mode()) {
                 scene.warnings.push(format!(
@@ -279,17 +276,26 @@ fn load_node(
                 ));
                 continue;
             }
-            warn_unread(scene, &format!("{mesh_label} primitive {pi}"), &prim, node);
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
             let Some(positions) = prim.get(&Semantic::Positions) else {
                 return Err(Error::InvalidScene(format!(
                     "{mesh_label} primitive {pi} has no POSITION attribute"
                 )));
             };
-            // A skinned mesh is posed by its joints and ignores its node's
-            // transform (glTF 2.0 §3.7.3.3).
-            let skinning = match node.skin() {
-                Some(skin) => Skinning::of(&skin, &prim, buffers, worlds)?,
+            let skinning = match &skin {
+                Some(joints) => {
+                    let s = Skinning::of(joints, &prim, buffers)?;
+                    if s.is_none() {
+                        warn_once(
+                            scene,
+                            format!(
+                                "{mesh_label} primitive {pi}: it has a skin but no JOINTS_0 \
+                                 and WEIGHTS_0: it is placed by its node"
+                            ),
+                        );
+                    }
+                    s
+                }
                 None => None,
             };
             let mut positions = read_f32_vectors::<3>(&positions, buffers)?;
@@ -385,9 +391,7 @@ fn load_node(
     Ok(())
 }
 
-/// glTF 2.0's default material (§3.9.6), for primitives without one: the
-/// metallic-roughness defaults, a white metal of roughness 1.
-/// The specification's default material's factors: white, metallic 1,
+/// The factors of glTF 2.0's default material: white, metallic 1,
 /// roughness 1.
 fn spec_default_factors() -> GltfMaterial {
     GltfMaterial::new(Vec3::ONE, 1.0, 1.0)
@@ -440,6 +444,8 @@ fn load_colors(
     Ok(())
 }
 
+/// glTF 2.0's default material (§3.9.6), for primitives without one: the
+/// metallic-roughness defaults, a white metal of roughness 1.
 fn spec_default_material() -> Result<Material> {
     let brdf = from_gltf_material(&spec_default_factors())
         .map_err(|e| Error::InvalidScene(format!("the default material: {e}")))?;

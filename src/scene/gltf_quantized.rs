@@ -32,8 +32,8 @@ pub(super) const KHR_MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
 /// `buffers` are the scene's loaded buffers, indexed as the file's.
 ///
 /// # Errors
-/// [`Error::InvalidScene`] naming the accessor when it is not a SCALAR or
-/// VECn of `N` components, when it stores `UNSIGNED_INT` or normalized
+/// [`Error::InvalidScene`] naming the accessor when it is not a SCALAR,
+/// VECn or (`N` = 16) MAT4 of `N` components, when it stores `UNSIGNED_INT` or normalized
 /// `FLOAT` (no vertex attribute does), or when an element, a sparse index or
 /// a sparse value lies outside its buffer view; [`Error::OutOfMemory`] when
 /// the floats cannot be allocated.
@@ -136,12 +136,13 @@ struct Storage {
 
 impl Storage {
     /// The storage of `accessor`, if it holds vectors of `n` components that
-    /// an attribute may store; `Err` says why not.
+    /// an attribute may store (or 4x4 matrices, 16 components whose columns
+    /// need no padding); `Err` says why not.
     fn of(accessor: &gltf::Accessor<'_>, n: usize) -> std::result::Result<Self, String> {
         let dimensions = accessor.dimensions();
         let vector = matches!(
             dimensions,
-            Type::Scalar | Type::Vec2 | Type::Vec3 | Type::Vec4
+            Type::Scalar | Type::Vec2 | Type::Vec3 | Type::Vec4 | Type::Mat4
         );
         if !vector || multiplicity(dimensions) != n as u64 {
             return Err(format!("is {dimensions:?}, not a vector of {n} components"));

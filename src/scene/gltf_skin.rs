@@ -3,37 +3,59 @@
 //! and ignores the transform of the node the mesh hangs from. Animations
 //! are not read, so the joints stand where the node hierarchy puts them.
 //!
-//! [`Skinning`] is built once per primitive from `JOINTS_0`, `WEIGHTS_0`
-//! and the skin's `inverseBindMatrices` (identity when absent), and then
+//! [`JointMatrices`] are built once per skinned node from the skin's
+//! joints and `inverseBindMatrices` (identity when absent); [`Skinning`]
+//! once per primitive from them, `JOINTS_0` and `WEIGHTS_0`, and it then
 //! transforms the primitive's positions and normals like a node's matrix
 //! does for an unskinned one.
 
 use super::gltf_checks::label;
 use super::gltf_quantized::read_f32_vectors;
 use crate::error::{Error, Result};
-use glam::{Mat3, Mat4, Vec3, Vec4};
-use gltf::accessor::{DataType, Dimensions};
+use glam::{Mat3, Mat4, Vec3};
+use gltf::accessor::DataType;
 use gltf::mesh::Semantic;
+
+/// A skin's `world(joint) * inverseBind`, one per joint, and its label
+/// for messages.
+pub(super) struct JointMatrices {
+    name: String,
+    matrices: Vec<Mat4>,
+}
+
+impl JointMatrices {
+    /// Those of `skin`, whose nodes' world transforms are `worlds` (by
+    /// node index; `None` for a node outside the scene).
+    pub(super) fn of(
+        skin: &gltf::Skin,
+        buffers: &[Vec<u8>],
+        worlds: &[Option<Mat4>],
+    ) -> Result<Self> {
+        let name = label("skin", skin.index(), skin.name());
+        match joint_matrices(skin, buffers, worlds) {
+            Ok(matrices) => Ok(JointMatrices { name, matrices }),
+            Err(why) => Err(Error::InvalidScene(format!("{name}: {why}"))),
+        }
+    }
+}
 
 /// A primitive's joints and weights, and its skin's joint matrices: each
 /// vertex's matrix is blended when asked for (stored, one 64-byte matrix a
 /// vertex would be five times the positions' memory).
-pub(super) struct Skinning {
-    joint_matrices: Vec<Mat4>,
+pub(super) struct Skinning<'a> {
+    joint_matrices: &'a [Mat4],
     joints: Vec<[f32; 4]>,
     weights: Vec<[f32; 4]>,
 }
 
-impl Skinning {
-    /// The rest pose of primitive `prim` of a mesh skinned by `skin`, whose
-    /// nodes' world transforms are `worlds` (by node index; `None` for a
-    /// node outside the scene); `Ok(None)` when the primitive has no
+impl<'a> Skinning<'a> {
+    /// The rest pose of primitive `prim` of a mesh skinned by the skin of
+    /// joint matrices `skin`; `Ok(None)` when the primitive has no
     /// `JOINTS_0`/`WEIGHTS_0`.
     pub(super) fn of(
-        skin: &gltf::Skin,
+        skin: &'a JointMatrices,
         prim: &gltf::Primitive,
         buffers: &[Vec<u8>],
-        worlds: &[Option<Mat4>],
     ) -> Result<Option<Self>> {
         let (Some(joints), Some(weights)) = (
             prim.get(&Semantic::Joints(0)),
@@ -41,9 +63,8 @@ impl Skinning {
         ) else {
             return Ok(None);
         };
-        let name = label("skin", skin.index(), skin.name());
-        let bad = |why: String| Error::InvalidScene(format!("{name}: {why}"));
-        let joint_matrices = joint_matrices(skin, buffers, worlds).map_err(bad)?;
+        let bad = |why: String| Error::InvalidScene(format!("{}: {why}", skin.name));
+        let joint_matrices = &skin.matrices[..];
         let joints = read_f32_vectors::<4>(&joints, buffers)?;
         let weights = read_f32_vectors::<4>(&weights, buffers)?;
         if joints.len() != weights.len() {
@@ -126,11 +147,11 @@ fn joint_matrices(
     let inverse_binds = match skin.inverse_bind_matrices() {
         None => vec![Mat4::IDENTITY; count],
         Some(a) => {
-            if a.data_type() != DataType::F32 || a.dimensions() != Dimensions::Mat4 {
+            // glTF allows FLOAT alone here (the reader would dequantize others).
+            if a.data_type() != DataType::F32 {
                 return Err(format!(
-                    "its inverseBindMatrices are {:?} {:?}, not FLOAT MAT4",
-                    a.data_type(),
-                    a.dimensions()
+                    "its inverseBindMatrices are {:?}, not FLOAT MAT4",
+                    a.data_type()
                 ));
             }
             if a.count() < count {
@@ -139,10 +160,10 @@ fn joint_matrices(
                     a.count()
                 ));
             }
-            let columns = read_columns(&a, buffers)?;
-            columns
-                .chunks_exact(4)
-                .map(|c| Mat4::from_cols(c[0], c[1], c[2], c[3]))
+            read_f32_vectors::<16>(&a, buffers)
+                .map_err(|e| format!("its inverseBindMatrices: {e}"))?
+                .iter()
+                .map(Mat4::from_cols_array)
                 .collect()
         }
     };
@@ -165,33 +186,4 @@ fn joint_matrices(
             }
         })
         .collect()
-}
-
-/// A FLOAT MAT4 accessor's elements as columns, four per matrix; its byte
-/// range is checked by the loader before any accessor is read.
-fn read_columns(a: &gltf::Accessor, buffers: &[Vec<u8>]) -> std::result::Result<Vec<Vec4>, String> {
-    let view = a
-        .view()
-        .ok_or("its inverseBindMatrices have no bufferView")?;
-    let data = buffers
-        .get(view.buffer().index())
-        .ok_or("its inverseBindMatrices' buffer is missing")?;
-    let stride = view.stride().unwrap_or(64);
-    let base = view.offset() + a.offset();
-    let mut out = Vec::with_capacity(a.count() * 4);
-    for i in 0..a.count() {
-        let start = base + i * stride;
-        let bytes = data
-            .get(start..start + 64)
-            .filter(|_| start + 64 <= view.offset() + view.length())
-            .ok_or("its inverseBindMatrices lie past their bufferView")?;
-        let f: Vec<f32> = bytes
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
-        for c in f.chunks_exact(4) {
-            out.push(Vec4::new(c[0], c[1], c[2], c[3]));
-        }
-    }
-    Ok(out)
 }

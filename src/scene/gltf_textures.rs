@@ -195,11 +195,10 @@ impl<'a> TextureLoader<'a> {
         let pbr = m.pbr_metallic_roughness();
         let cutoff = m.alpha_cutoff().unwrap_or(AlphaMask::DEFAULT_CUTOFF);
         let mask = AlphaMask::new(cutoff, pbr.base_color_factor()[3]);
-        let texture = match pbr.base_color_texture() {
-            Some(info) => self.texture_ref(&info, scene)?,
-            None => None,
-        };
-        Ok(Some(match texture {
+        let texture = pbr
+            .base_color_texture()
+            .map(|info| self.texture_ref(&info, scene));
+        Ok(Some(match texture.transpose()?.flatten() {
             Some(t) => mask.with_texture(t),
             None => mask,
         }))

@@ -830,9 +830,10 @@ impl Scene {
 
 #[cfg(test)]
 mod area_tests {
+    use super::*;
+
     #[test]
     fn framing_sees_every_corner_of_the_box() {
-        use super::Camera;
         for (lo, hi) in [
             (Vec3::splat(-0.5), Vec3::splat(0.5)),
             (Vec3::new(0.0, 0.0, 0.0), Vec3::new(556.0, 548.8, 559.2)),
@@ -854,7 +855,6 @@ mod area_tests {
         }
         assert!(Camera::framing(Vec3::splat(f32::NAN), Vec3::ONE).is_err());
     }
-    use super::*;
 
     /// A 10 x 10 floor of 2 x 1000 x 1000 triangles: 100 exactly (each
     /// triangle's area, 5e-5, is nearly exact in f32); the f32 sum read 99.5.

@@ -172,9 +172,12 @@ impl Scene {
         // A point keeps its material's class: the tracer, the renderer and
         // the path tracer decide per material where photons are stored and
         // where paths pass through (module docs).
+        if own.is_specular() {
+            return *own;
+        }
         let colour = self.vertex_color(hit);
         let untextured = maps.base_color.is_none() && maps.metallic_roughness.is_none();
-        if own.is_specular() || (untextured && colour.is_none()) {
+        if untextured && colour.is_none() {
             return *own;
         }
         let read = |r: &Option<TextureRef>, e| {
