@@ -48,10 +48,23 @@
 //! `transmissionFactor`: glTF mixes transmission into the dielectric part
 //! alone (`mix(dielectric, metal, metallic)`), so it is the opaque mapping.
 //!
-//! Not modelled, and refused rather than approximated:
-//! `0 < transmissionFactor < 1` (a mix of glass and the opaque base) and
-//! transmission on a partial metal (`0 < metallic < 1`, a mix of glass and
-//! metal). The extensions' textures are
+//! # Partial transmission
+//! `0 < transmissionFactor = t < 1` with `metallic = 0` is a mix
+//! ([`gltf_lobes`]). glTF's dielectric is
+//! `F spec + (1 - F) mix(diffuse, btdf, t)`, and since the specular
+//! reflection `F spec` is the same in both parts, that is exactly
+//! `(1 - t) opaque + t glass`: the opaque mapping above and the glass
+//! mapping, of the same roughness, IOR and tint. The scene keeps the two
+//! parts as two materials and picks one per scattering event
+//! ([`crate::scene::TransmissionMix`]). Only a thin wall mixes
+//! (`thicknessFactor = 0`): a partly transmitting volume is refused.
+//! [`from_gltf_material`], which returns one BRDF, refuses partial
+//! transmission.
+//!
+//! Not modelled, and refused rather than approximated: transmission on a
+//! partial metal (`0 < metallic < 1`, a mix of glass and metal, whose
+//! opaque part glTF's simplified BRDF does not mix linearly), and partial
+//! transmission of a volume. The extensions' textures are
 //! ignored (the opaque materials' base colour and metallic-roughness
 //! textures are read by the scene loader, which maps each point's factors
 //! here).
@@ -175,6 +188,16 @@ pub fn from_gltf_pbr(base_color: Vec3, metallic: f32, roughness: f32) -> Result<
     from_gltf_material(&GltfMaterial::new(base_color, metallic, roughness))
 }
 
+/// A glTF material as this crate models it (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GltfLobes {
+    /// The whole material, or its opaque part when it transmits partly.
+    pub surface: Brdf,
+    /// When it transmits partly: `(transmissionFactor, glass)`, the share
+    /// of the glass part and its (thin, specular) model.
+    pub transmitted: Option<(f32, Brdf)>,
+}
+
 /// Maps a glTF material with its transmission, IOR and volume extensions to a
 /// [`Brdf`] (see the module docs).
 ///
@@ -185,10 +208,33 @@ pub fn from_gltf_pbr(base_color: Vec3, metallic: f32, roughness: f32) -> Result<
 /// - `ior` is neither 0 nor in [1, 4];
 /// - `thicknessFactor` is negative or not finite, `attenuationDistance` is
 ///   not > 0, or an `attenuationColor` channel is outside [0, 1];
-/// - the material transmits partly (`0 < transmissionFactor < 1`) or is a
-///   transmitting partial metal (`0 < metallic < 1`): neither is modelled
-///   (a full metal transmits nothing: its transmission is ignored).
+/// - the material transmits partly (`0 < transmissionFactor < 1`), which
+///   one BRDF cannot hold ([`gltf_lobes`] maps it), or is a transmitting
+///   partial metal (`0 < metallic < 1`), which is not modelled (a full
+///   metal transmits nothing: its transmission is ignored).
 pub fn from_gltf_material(m: &GltfMaterial) -> Result<Brdf> {
+    let lobes = gltf_lobes(m)?;
+    if let Some((t, _)) = lobes.transmitted {
+        return Err(Error::param(
+            "gltf transmissionFactor",
+            format!(
+                "partial transmission ({t}) is a mix of two models, not one BRDF: map it with \
+                 gltf_lobes"
+            ),
+        ));
+    }
+    Ok(lobes.surface)
+}
+
+/// Maps a glTF material to its models: one BRDF, or for partial
+/// transmission (`0 < transmissionFactor < 1`, `metallic = 0`, a thin
+/// wall) the opaque part and the glass part with its share (module docs).
+///
+/// # Errors
+/// As [`from_gltf_material`], except that partial transmission of a thin
+/// dielectric is mapped; partial transmission of a volume
+/// (`thicknessFactor > 0`) is refused.
+pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     let base_color = super::phong::check_rgb01("gltf baseColorFactor", m.base_color)?;
     for (name, v) in [
         ("gltf metallicFactor", m.metallic),
@@ -216,19 +262,16 @@ pub fn from_gltf_material(m: &GltfMaterial) -> Result<Brdf> {
     }
     let volume = m.volume.unwrap_or_default().check()?;
     let (metallic, roughness) = (m.metallic, m.roughness);
+    let alone = |surface| {
+        Ok(GltfLobes {
+            surface,
+            transmitted: None,
+        })
+    };
     // IOR 0: the Fresnel term is 1, no light enters, nothing is transmitted.
     // A full metal has no dielectric part to transmit through.
     if transmission == 0.0 || ior == 0.0 || metallic == 1.0 {
-        return opaque(base_color, metallic, roughness, dielectric_f0(ior));
-    }
-    if transmission < 1.0 {
-        return Err(Error::param(
-            "gltf transmissionFactor",
-            format!(
-                "partial transmission is not modelled: got {transmission}, use 0 (opaque) or 1 \
-                 (glass)"
-            ),
-        ));
+        return alone(opaque(base_color, metallic, roughness, dielectric_f0(ior))?);
     }
     if metallic > 0.0 {
         return Err(Error::param(
@@ -240,13 +283,30 @@ pub fn from_gltf_material(m: &GltfMaterial) -> Result<Brdf> {
         ));
     }
     let thin = volume.thickness == 0.0;
+    if transmission < 1.0 && !thin {
+        return Err(Error::param(
+            "gltf transmissionFactor",
+            format!(
+                "partial transmission ({transmission}) of a volume (thicknessFactor {}) is not \
+                 modelled: use transmissionFactor 1, or thicknessFactor 0 (a thin wall)",
+                volume.thickness
+            ),
+        ));
+    }
     let sigma_a = if thin { Vec3::ZERO } else { volume.sigma_a() };
     let alpha = roughness * roughness;
-    if alpha < RoughDielectric::MIN_ALPHA {
-        Ok(Dielectric::new(ior, base_color, sigma_a, thin)?.into())
+    let glass: Brdf = if alpha < RoughDielectric::MIN_ALPHA {
+        Dielectric::new(ior, base_color, sigma_a, thin)?.into()
     } else {
-        Ok(RoughDielectric::new(alpha, ior, base_color, sigma_a, thin)?.into())
+        RoughDielectric::new(alpha, ior, base_color, sigma_a, thin)?.into()
+    };
+    if transmission == 1.0 {
+        return alone(glass);
     }
+    Ok(GltfLobes {
+        surface: opaque(base_color, 0.0, roughness, dielectric_f0(ior))?,
+        transmitted: Some((transmission, glass)),
+    })
 }
 
 /// The dielectric Fresnel reflectance at normal incidence of IOR `ior`
@@ -453,6 +513,56 @@ mod tests {
     }
 
     #[test]
+    fn partial_transmission_is_the_opaque_part_and_the_glass_part() {
+        let part = |roughness, t| GltfMaterial {
+            transmission: Some(t),
+            ..glass(roughness)
+        };
+        // Smooth: a GltfPbr (its polished lobe) and smooth glass, both of
+        // the material's tint and IOR.
+        let lobes = gltf_lobes(&part(0.0, 0.3)).unwrap();
+        let Brdf::GltfPbr(opaque) = lobes.surface else {
+            panic!("the opaque part of a smooth dielectric is the glTF BRDF")
+        };
+        assert_eq!(opaque.f0(), Vec3::splat(0.04));
+        let Some((0.3, Brdf::Dielectric(d))) = lobes.transmitted else {
+            panic!("smooth glass of weight 0.3: {:?}", lobes.transmitted)
+        };
+        assert!(d.thin());
+        // The parts are the opaque and the glass mappings themselves.
+        let opaque_alone = GltfMaterial {
+            transmission: None,
+            ..part(0.5, 0.7)
+        };
+        let lobes = gltf_lobes(&part(0.5, 0.7)).unwrap();
+        assert_eq!(lobes.surface, from_gltf_material(&opaque_alone).unwrap());
+        assert_eq!(
+            lobes.transmitted.map(|(_, g)| g),
+            Some(from_gltf_material(&part(0.5, 1.0)).unwrap())
+        );
+        // Rough and matte: Lambert and rough glass.
+        let lobes = gltf_lobes(&part(1.0, 0.5)).unwrap();
+        assert!(matches!(lobes.surface, Brdf::Lambert(_)));
+        assert!(matches!(
+            lobes.transmitted,
+            Some((0.5, Brdf::RoughDielectric(_)))
+        ));
+        // Whole glass and opaque stay one model.
+        assert_eq!(gltf_lobes(&part(0.0, 1.0)).unwrap().transmitted, None);
+        assert_eq!(gltf_lobes(&part(0.0, 0.0)).unwrap().transmitted, None);
+        // A partly transmitting volume is refused by name.
+        let volume = GltfMaterial {
+            volume: Some(GltfVolume {
+                thickness: 1.0,
+                ..GltfVolume::default()
+            }),
+            ..part(0.0, 0.5)
+        };
+        let e = gltf_lobes(&volume).unwrap_err().to_string();
+        assert!(e.contains("of a volume") && e.contains("0.5"), "{e}");
+    }
+
+    #[test]
     fn bad_factors_are_refused_by_name_and_value() {
         let cases: [(GltfMaterial, &[&str]); 10] = [
             (
@@ -474,7 +584,7 @@ mod tests {
                     transmission: Some(0.5),
                     ..glass(0.0)
                 },
-                &["partial transmission is not modelled", "0.5"],
+                &["partial transmission (0.5) is a mix", "gltf_lobes"],
             ),
             (
                 GltfMaterial {

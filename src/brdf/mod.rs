@@ -29,7 +29,9 @@ pub mod rough_dielectric;
 
 pub use cook_torrance::CookTorrance;
 pub use dielectric::{Dielectric, Transport};
-pub use gltf_map::{from_gltf_material, from_gltf_pbr, GltfMaterial, GltfVolume};
+pub use gltf_map::{
+    from_gltf_material, from_gltf_pbr, gltf_lobes, GltfLobes, GltfMaterial, GltfVolume,
+};
 pub use gltf_pbr::GltfPbr;
 pub use lambert::Lambert;
 pub use mirror::Mirror;

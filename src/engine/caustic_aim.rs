@@ -121,19 +121,15 @@ pub struct AimedDirection {
 }
 
 impl CausticAim {
-    /// A sphere about every mesh whose material is specular (mirror or
-    /// glass) and that has a vertex; none in a scene without one.
+    /// A sphere about every mesh whose material may scatter specularly
+    /// (mirror, glass, or partly glass) and that has a vertex; none in a
+    /// scene without one.
     pub fn new(scene: &Scene) -> Self {
-        let materials = scene.materials();
         let targets = scene
             .meshes()
             .iter()
             .enumerate()
-            .filter(|(_, m)| {
-                materials
-                    .get(m.material)
-                    .is_some_and(|mat| mat.brdf.is_specular())
-            })
+            .filter(|(_, m)| scene.may_scatter_specularly(m.material))
             .filter_map(|(i, m)| bounding_sphere(&m.positions).map(|(c, r)| (i, c, r)))
             .map(|(mesh, centre, radius)| Target {
                 centre,

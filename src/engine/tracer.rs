@@ -53,8 +53,8 @@ fn split_bound(
 /// A material's alpha_D table (`None` outside adaptive mode and for delta BRDFs).
 type MaterialTable = Option<Arc<DirectionalityTable>>;
 
-/// alpha_D tables for the materials the scene's meshes use (adaptive mode
-/// only): only what the scene needs is analysed.
+/// alpha_D tables for the materials the scene's meshes use, and their
+/// glass parts (adaptive mode only): only what the scene needs is analysed.
 fn material_tables(
     scene: &Scene,
     cache: &mut AnalysisCache,
@@ -65,10 +65,15 @@ fn material_tables(
         return Ok(tables);
     }
     for mesh in &scene.meshes {
-        let m = mesh.material;
-        let brdf = &scene.materials[m].brdf;
-        if tables[m].is_none() && !brdf.is_delta() {
-            tables[m] = Some(cache.brdf(brdf)?);
+        // A partly transmitting material scatters by its glass part too.
+        let glass = scene
+            .transmission_mix(mesh.material as u32)
+            .map(|mix| mix.glass);
+        for m in std::iter::once(mesh.material).chain(glass) {
+            let brdf = &scene.materials[m].brdf;
+            if tables[m].is_none() && !brdf.is_delta() {
+                tables[m] = Some(cache.brdf(brdf)?);
+            }
         }
     }
     Ok(tables)

@@ -154,13 +154,12 @@ fn shade_hit<C>(
 ) {
     out.hits += 1;
     let position = p.origin + p.direction * h.t;
-    let material = h.material as usize;
     // Checked by `Hit::check`; `None` keeps a missed case a stop, not a
     // panic. A textured material scatters by its texels at this point.
-    let Some(brdf) = ctx.scene.surface_brdf(h) else {
+    let Some(surface) = ctx.scene.surface_brdf(h) else {
         return;
     };
-    let brdf = &brdf;
+    let brdf = &surface;
     let from_inside = h.ng.dot(p.direction) > 0.0;
     let mut power = p.power;
     if from_inside {
@@ -184,9 +183,7 @@ fn shade_hit<C>(
             if record.caustic && position.is_finite() && power.is_finite() {
                 out.records.push(record);
             }
-            return;
-        }
-        if !read {
+        } else if !read {
             out.unread += 1;
         } else if ctx.keep_records {
             out.records.push(record);
@@ -200,6 +197,24 @@ fn shade_hit<C>(
     if !ctx.continue_paths {
         return;
     }
+    // A partly transmitting surface scatters by one of its parts (stored
+    // above whichever it is), drawn from a stream of its own so that other
+    // scenes draw the numbers they always drew.
+    let material = ctx.scene.scattering_material(h.material, || {
+        Rng::new(p.key ^ 0x1_0BE5_0000_0000).next_f32()
+    });
+    let glass;
+    let brdf = if material == h.material {
+        brdf
+    } else {
+        glass = ctx.scene.materials[material as usize].brdf;
+        &glass
+    };
+    // The caustic pass ends at its first non-specular scattering.
+    if ctx.caustic_only && !brdf.is_specular() {
+        return;
+    }
+    let material = material as usize;
     let side = ctx.scene.scattering_normal(brdf, h, from_inside);
     let n = match brdf.is_specular() {
         true => side,

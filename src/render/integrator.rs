@@ -221,6 +221,11 @@ impl<'a> Ctx<'a> {
             if bounce >= first_emission {
                 *emitted += throughput * self.emitted(material, &h, wo);
             }
+            // A partly transmitting surface scatters by one of its parts.
+            let scattering = self
+                .scene
+                .scattering_material(h.material, || rng.next_f32());
+            let material = &self.scene.materials[scattering as usize];
             if !material.brdf.is_specular() {
                 return Some(SurfaceHit {
                     position,

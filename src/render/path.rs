@@ -230,6 +230,11 @@ impl<'a> PathTracer<'a> {
                     l += beta * le * w;
                 }
             }
+            // A partly transmitting surface scatters by one of its parts.
+            let scattering = self
+                .scene
+                .scattering_material(h.material, || rng.next_f32());
+            let mat = &self.scene.materials[scattering as usize];
             if mat.brdf.is_specular() {
                 // Mirrors and glass (rough glass too: sampled, not lit by
                 // next-event estimation, whose shadow rays it blocks).

@@ -19,11 +19,13 @@
 //!   node's -Z axis; its photon disc is fitted to the scene's bounds by
 //!   [`Scene`] as meshes are added, not here (later nodes may add geometry).
 //! - The first perspective camera found becomes [`Scene::camera`].
-//! - Materials map to BRDFs by [`crate::brdf::gltf_map::from_gltf_material`]:
+//! - Materials map to BRDFs by [`crate::brdf::gltf_map::gltf_lobes`]:
 //!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_transmission`
 //!   (glass) and `KHR_materials_volume` (thin wall or refracting volume,
-//!   absorption); a value outside its range, partial transmission and
-//!   transmission on a partial metal are refused, naming the material.
+//!   absorption); partial transmission of a thin dielectric is its opaque
+//!   part and a glass part ([`super::TransmissionMix`]); a value outside
+//!   its range, partial transmission of a volume and transmission on a
+//!   partial metal are refused, naming the material.
 //! - Base colour and metallic-roughness textures multiply their factors
 //!   ([`super::gltf_textures`], [`super::textured`]); so does an
 //!   `emissiveTexture` the emission, making an area light whose radiance
@@ -50,7 +52,8 @@ use super::assets::AssetRoot;
 use super::gltf_quantized::read_f32_vectors;
 use super::gltf_skin::{JointMatrices, Skinning};
 use super::{Camera, DirectionalLight, Emission, Light, Material, PointLight, Scene, SpotLight};
-use crate::brdf::gltf_map::{from_gltf_material, GltfMaterial, GltfVolume};
+use crate::brdf::gltf_map::{from_gltf_material, gltf_lobes, GltfMaterial, GltfVolume};
+use crate::brdf::Brdf;
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
 use glam::{Mat4, Vec3};
@@ -132,9 +135,12 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
     let mut material_factors = Vec::with_capacity(doc.materials().len());
     let mut textures = super::gltf_textures::TextureLoader::new(doc.as_json(), &buffers, assets);
     for m in doc.materials() {
-        let (material, factors) = convert_material(&m)?;
+        let (material, factors, transmitted) = convert_material(&m)?;
         let specular = material.brdf.is_specular();
         let id = scene.add_material(material);
+        if let Some((weight, glass)) = transmitted {
+            scene.set_transmission_mix(id, weight, glass)?;
+        }
         material_factors.push(factors);
         if let Some(maps) = textures.maps_of(&m, factors, specular, &mut scene)? {
             scene.set_material_maps(id, maps)?;
@@ -456,8 +462,9 @@ fn spec_default_material() -> Result<Material> {
     })
 }
 
-/// The material and the glTF factors it was mapped from.
-fn convert_material(m: &gltf::Material) -> Result<(Material, GltfMaterial)> {
+/// The material, the glTF factors of its textures (its opaque part's when
+/// it transmits partly) and its transmitted part with that part's share.
+fn convert_material(m: &gltf::Material) -> Result<(Material, GltfMaterial, Option<(f32, Brdf)>)> {
     let label = match m.index() {
         Some(i) => super::gltf_checks::label("material", i, m.name()),
         None => "the default material".to_string(),
@@ -476,8 +483,8 @@ fn convert_material(m: &gltf::Material) -> Result<(Material, GltfMaterial)> {
             attenuation_color: Vec3::from(v.attenuation_color()),
         }),
     };
-    let brdf =
-        from_gltf_material(&input).map_err(|e| Error::InvalidScene(format!("{label}: {e}")))?;
+    let lobes = gltf_lobes(&input).map_err(|e| Error::InvalidScene(format!("{label}: {e}")))?;
+    let brdf = lobes.surface;
     let strength = m.emissive_strength().unwrap_or(1.0);
     let radiance = Vec3::from(m.emissive_factor()) * strength;
     if !radiance.is_finite() || radiance.min_element() < 0.0 {
@@ -501,7 +508,13 @@ fn convert_material(m: &gltf::Material) -> Result<(Material, GltfMaterial)> {
         brdf,
         emission,
     };
-    Ok((material, input))
+    // The textures of a partly transmitting material colour its opaque
+    // part: its factors are that part's.
+    let factors = GltfMaterial {
+        transmission: lobes.transmitted.map_or(input.transmission, |_| None),
+        ..input
+    };
+    Ok((material, factors, lobes.transmitted))
 }
 
 /// `extras.cosn` of a material, 0 when absent.

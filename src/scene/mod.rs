@@ -50,6 +50,7 @@ mod prepared;
 mod surface;
 pub mod texture;
 mod textured;
+mod transmission_mix;
 
 #[cfg(feature = "gltf")]
 pub use assets::{percent_decode, resolve_inside};
@@ -70,6 +71,7 @@ pub use prepared::PreparedScene;
 pub use surface::{consistent_with_geometry, photon_shading_factor, SurfacePoint, SurfaceSampler};
 pub use texture::{Encoding, Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
 pub use textured::{flat_base_color, MaterialMaps};
+pub use transmission_mix::TransmissionMix;
 
 use crate::brdf::Brdf;
 use crate::emitter::CosN;
@@ -358,6 +360,8 @@ pub struct Scene {
     /// mesh: kept as meshes are added, so that directional lights can be
     /// refitted to it without a pass over all the geometry.
     pub(crate) geometry_bounds: Option<(Vec3, Vec3)>,
+    /// Per material, its transmitted part (`None`, or past the end: none).
+    pub(crate) transmission_mixes: Vec<Option<TransmissionMix>>,
 }
 
 /// `bounds` grown by the vertices of `mesh`'s triangles.

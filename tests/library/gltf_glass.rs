@@ -177,6 +177,39 @@ fn transmission_ior_and_volume_are_read() {
 }
 
 #[test]
+fn partial_transmission_is_the_opaque_part_and_a_glass_part() {
+    let partial = r#"{"KHR_materials_transmission":{"transmissionFactor":0.25}}"#;
+    let s = load(ROUGH, partial).unwrap();
+    let (i, probe) = s
+        .materials()
+        .iter()
+        .enumerate()
+        .find(|(_, m)| m.name == "probe")
+        .unwrap();
+    // The mesh keeps the material, whose BRDF is the opaque part.
+    let Brdf::GltfPbr(opaque) = probe.brdf else {
+        panic!("the opaque part of a rough dielectric: {:?}", probe.brdf)
+    };
+    assert_eq!(opaque.f0(), Vec3::splat(0.04));
+    let mix = s.transmission_mix(i as u32).expect("a transmitted part");
+    assert_eq!(mix.weight, 0.25);
+    let glass = &s.materials()[mix.glass];
+    assert_eq!(glass.name, "probe (transmitted part)");
+    let Brdf::RoughDielectric(r) = glass.brdf else {
+        panic!("the glass part of roughness 0.5 is rough glass")
+    };
+    assert_eq!((r.alpha(), r.ior(), r.thin()), (0.25, 1.5, true));
+    // Whole glass has no mix.
+    let whole = load(SMOOTH, &format!("{{{FULL}}}")).unwrap();
+    let i = whole
+        .materials()
+        .iter()
+        .position(|m| m.name == "probe")
+        .unwrap();
+    assert_eq!(whole.transmission_mix(i as u32), None);
+}
+
+#[test]
 fn bad_transmission_ior_and_volume_values_are_refused_by_name() {
     let volume = |v: &str| format!(r#"{{{FULL},"KHR_materials_volume":{{{v}}}}}"#);
     let cases = [
@@ -185,8 +218,8 @@ fn bad_transmission_ior_and_volume_values_are_refused_by_name() {
             "`gltf transmissionFactor`: must be in [0, 1], got 1.5",
         ),
         (
-            r#"{"KHR_materials_transmission":{"transmissionFactor":0.5}}"#.to_string(),
-            "partial transmission is not modelled: got 0.5",
+            r#"{"KHR_materials_transmission":{"transmissionFactor":0.5},"KHR_materials_volume":{"thicknessFactor":1}}"#.to_string(),
+            "partial transmission (0.5) of a volume (thicknessFactor 1) is not modelled",
         ),
         (
             format!(r#"{{{FULL},"KHR_materials_ior":{{"ior":0.5}}}}"#),

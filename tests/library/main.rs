@@ -48,6 +48,7 @@ mod importance_pass;
 mod isa_pinning;
 mod kdtree;
 mod kdtree_memory;
+mod partial_transmission;
 mod path_tracer;
 mod photon_density;
 mod raycast;
