@@ -322,4 +322,5 @@ def main():
         print(f"blender_scene.py: rendered {render_path}")
 
 
-main()
+if __name__ == "__main__":
+    main()

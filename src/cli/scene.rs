@@ -96,6 +96,18 @@ fn textures_note(scene: &Scene, material: usize) -> String {
 }
 
 /// A material's alpha mask, for the listing (empty when it has none).
+/// The transmitted part of a partly transmitting material, if it has one.
+fn mix_note(scene: &Scene, material: usize) -> String {
+    match scene.transmission_mix(material as u32) {
+        Some(t) => format!(
+            "  transmits {}: `{}`",
+            t.weight,
+            scene.materials()[t.glass].name
+        ),
+        None => String::new(),
+    }
+}
+
 fn mask_note(scene: &Scene, material: usize) -> String {
     let Some(mask) = scene.alpha_mask(material) else {
         return String::new();
@@ -148,7 +160,8 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
             "triangles": scene.triangle_count(),
             "meshes": scene.meshes().len(),
             "materials": scene.materials().iter().enumerate().map(|(i, m)| json!({"name": m.name, "brdf": brdf_name(&m.brdf), "emissive": m.emission.is_some(),
-                "alpha_cutoff": scene.alpha_mask(i).map(|a| a.cutoff)})).collect::<Vec<_>>(),
+                "alpha_cutoff": scene.alpha_mask(i).map(|a| a.cutoff),
+                "transmitted": scene.transmission_mix(i as u32).map(|t| json!({"weight": t.weight, "material": t.glass}))})).collect::<Vec<_>>(),
             "lights": lights,
             "bounds": {"min": [lo.x, lo.y, lo.z], "max": [hi.x, hi.y, hi.z]},
             "camera": scene.camera().map(|c| json!({"eye": [c.eye.x, c.eye.y, c.eye.z], "forward": [c.forward.x, c.forward.y, c.forward.z], "vfov_deg": c.vfov_deg})),
@@ -182,7 +195,7 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
     println!("materials  {}", scene.materials().len());
     for (i, m) in scene.materials().iter().enumerate() {
         println!(
-            "  {:<16} {}{}{}{}",
+            "  {:<16} {}{}{}{}{}",
             m.name,
             brdf_name(&m.brdf),
             if m.emission.is_some() {
@@ -191,7 +204,8 @@ pub fn run(args: SceneArgs) -> anyhow::Result<()> {
                 ""
             },
             textures_note(&scene, i),
-            mask_note(&scene, i)
+            mask_note(&scene, i),
+            mix_note(&scene, i)
         );
     }
     println!("lights     {}", scene.lights().len());

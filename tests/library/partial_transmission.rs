@@ -15,6 +15,7 @@ use adaptive_pm::render::{render, render_path, Image, PathHalves, PathPart, Rend
 use adaptive_pm::sampling::luminance;
 use adaptive_pm::scene::{Camera, Emission, Material, Scene};
 use glam::Vec3;
+use std::path::Path;
 
 use super::caustic_pass::{material, quad};
 use crate::common::{self, assert_sigmas, assert_within_noise, MeanVar};
@@ -207,18 +208,18 @@ fn lit_sheet_scene() -> Scene {
     s
 }
 
-#[test]
-fn a_lit_partly_transmitting_sheet_renders_as_the_path_tracer_sees_it() {
-    let scene = lit_sheet_scene();
+/// The photon render's image (four independent renders, 16 spp) sums to
+/// the path tracer's (two halves of 1024 spp) within their measured noise.
+fn assert_renders_agree(check: &str, scene: &Scene, (width, height): (u32, u32), seed: u64) {
     let tracer = Tracer::new(scene.clone().commit(&Device::new().unwrap()).unwrap());
     let prepared = tracer.prepared();
-    let mut cfg = RenderConfig::new(32, 32);
+    let mut cfg = RenderConfig::new(width, height);
     cfg.show_emitters = false;
-    let pixels = (cfg.width * cfg.height) as f64;
+    let pixels = f64::from(width * height);
 
     let mut pc = cfg.clone();
     pc.spp = 1024;
-    pc.seed = common::seed(51);
+    pc.seed = common::seed(seed);
     let halves = PathHalves::render(prepared, &pc, PathPart::Full).unwrap();
     let sum = |img: &Image| -> f64 { img.pixels.iter().map(|p| f64::from(luminance(*p))).sum() };
     let path = sum(&halves.mean());
@@ -234,7 +235,7 @@ fn a_lit_partly_transmitting_sheet_renders_as_the_path_tracer_sees_it() {
     let mut photon = MeanVar::default();
     for k in 0..4 {
         let mut tc = TraceConfig::new(Mode::Adaptive, Budget::NMax(100_000));
-        tc.seed = common::seed(60 + k);
+        tc.seed = common::seed(seed + 1 + k);
         let out = tracer.trace(&tc).unwrap();
         let maps = cfg.build_maps(out.photons, out.frame);
         let mut rc = cfg.clone();
@@ -245,7 +246,7 @@ fn a_lit_partly_transmitting_sheet_renders_as_the_path_tracer_sees_it() {
     let v_photon = photon.std_error().powi(2);
     let sigma = (path_var + v_photon).sqrt();
     eprintln!(
-        "lit sheet: photon {:.3} (+- {:.3}), path {path:.3} (+- {:.3})",
+        "{check}: photon {:.3} (+- {:.3}), path {path:.3} (+- {:.3})",
         photon.mean(),
         photon.std_error(),
         path_var.sqrt()
@@ -255,10 +256,36 @@ fn a_lit_partly_transmitting_sheet_renders_as_the_path_tracer_sees_it() {
     // renders' spread.
     let dof = (path_var + v_photon).powi(2) / (path_var.powi(2) / pixels + v_photon.powi(2) / 3.0);
     let bound = common::family_bound(1, dof as u64, 1e-4);
-    assert_within_noise(
-        "the lit sheet's image",
-        photon.mean() - path,
-        sigma,
-        bound * sigma,
-    );
+    assert_within_noise(check, photon.mean() - path, sigma, bound * sigma);
+}
+
+#[test]
+fn a_lit_partly_transmitting_sheet_renders_as_the_path_tracer_sees_it() {
+    assert_renders_agree("the lit sheet's image", &lit_sheet_scene(), (32, 32), 51);
+}
+
+/// `assets/blender_frosted.glb`, written by Blender 3.4's exporter
+/// (`tools/blender_frosted.py`): a pane of Principled Transmission 0.5,
+/// roughness 0.3, over a floor, under an emitting panel.
+#[test]
+fn blenders_frosted_pane_is_half_glass_and_renders_as_the_path_tracer_sees_it() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/blender_frosted.glb");
+    let scene = Scene::load(file).unwrap();
+    let pane = scene
+        .meshes()
+        .iter()
+        .find(|m| m.name.starts_with("pane"))
+        .unwrap();
+    let Brdf::GltfPbr(opaque) = scene.materials()[pane.material].brdf else {
+        panic!("the pane's opaque part is glTF's BRDF")
+    };
+    assert_eq!(opaque.f0(), Vec3::splat(0.04));
+    let mix = scene.transmission_mix(pane.material as u32).unwrap();
+    assert_eq!(mix.weight, 0.5);
+    let Brdf::RoughDielectric(glass) = scene.materials()[mix.glass].brdf else {
+        panic!("roughness 0.3: rough glass")
+    };
+    assert_eq!((glass.ior(), glass.thin()), (1.5, true));
+    assert!((glass.alpha() - 0.09).abs() < 1e-6, "{}", glass.alpha());
+    assert_renders_agree("Blender's frosted pane", &scene, (32, 24), 71);
 }

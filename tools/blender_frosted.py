@@ -1,0 +1,92 @@
+"""Builds a scene with a partly transmitting pane in Blender and exports it with
+Blender's own glTF exporter: assets/blender_frosted.glb, a file written by a real
+exporter with KHR_materials_transmission below 1. Blender is needed only to
+regenerate the file, never by CI or the tests. It reuses tools/blender_scene.py's
+helpers (same Blender, same exporter settings).
+
+Produced on Debian bookworm with Blender 3.4.1 (Debian package 3.4.1+dfsg-2,
+`apt-get install --no-install-recommends blender python3-numpy`), run from the
+repository root:
+
+    blender -b --factory-startup --python tools/blender_frosted.py -- --out assets/blender_frosted.glb
+
+The scene (Blender is Z-up; the exporter writes glTF's Y-up), in metres:
+- floor: a 3 m x 3 m plane at z = 0, Principled BSDF, light grey, roughness 1
+  (the exporter writes metallic 0, roughness 1: Lambert here);
+- a frosted pane: a 1.2 m x 1.2 m plane 0.8 m above the floor, Principled
+  Transmission 0.5, roughness 0.3, IOR 1.5 (the exporter writes
+  KHR_materials_transmission 0.5 and leaves out KHR_materials_ior, 1.5 being
+  its default; no volume, so the pane is a thin wall);
+- a light panel: a 0.6 m x 0.6 m plane 2 m up, face turned down, a bare
+  Emission shader of strength 20;
+- a perspective camera (35 mm lens on a 36 mm sensor, 320 x 240) at a 3/4 view
+  from 2.2 m high, framing the pane and the floor it shades.
+"""
+import math
+import os
+import sys
+
+import bpy
+from mathutils import Vector
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import blender_scene as base  # noqa: E402
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    if len(argv) != 2 or argv[0] != "--out":
+        raise SystemExit("blender_frosted.py: use -- --out FILE.glb")
+    return argv[1]
+
+
+def plane(name, size, material, location, rotation=(0.0, 0.0, 0.0)):
+    mesh = base.primitive(bpy.ops.mesh.primitive_plane_add, size=size)
+    mesh.name = name
+    mesh.materials.append(material)
+    obj = base.mesh_object(name, mesh)
+    obj.location = location
+    obj.rotation_euler = rotation
+    return obj
+
+
+def build():
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = 320, 240
+    scene.render.resolution_percentage = 100
+
+    floor, _ = base.principled("floor", (0.7, 0.7, 0.7), roughness=1.0)
+    plane("floor", 3.0, floor, (0.0, 0.0, 0.0))
+    frosted, _ = base.principled("frosted", (0.9, 0.95, 1.0), roughness=0.3, transmission=0.5, ior=1.5)
+    plane("pane", 1.2, frosted, (0.0, 0.0, 0.8))
+
+    panel = bpy.data.materials.new("panel_emission")
+    panel.use_nodes = True
+    nodes, links = panel.node_tree.nodes, panel.node_tree.links
+    nodes.clear()
+    out = nodes.new("ShaderNodeOutputMaterial")
+    em = nodes.new("ShaderNodeEmission")
+    em.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    em.inputs["Strength"].default_value = 20.0
+    links.new(em.outputs["Emission"], out.inputs["Surface"])
+    plane("panel", 0.6, panel, (0.2, 0.1, 2.0), (math.pi, 0.0, 0.0))
+
+    cam = bpy.data.cameras.new("camera")
+    cam.lens, cam.sensor_width = 35.0, 36.0
+    cam_obj = base.link(bpy.data.objects.new("camera", cam))
+    cam_obj.location = Vector((2.2, -2.0, 2.2))
+    target = Vector((0.0, 0.0, 0.3))
+    cam_obj.rotation_euler = (target - cam_obj.location).to_track_quat("-Z", "Y").to_euler()
+    scene.camera = cam_obj
+    bpy.context.view_layer.update()
+
+
+def main():
+    out = parse_args()
+    base.clear_scene()
+    build()
+    base.export(out)
+    print(f"blender_frosted.py: wrote {out}")
+
+
+main()
