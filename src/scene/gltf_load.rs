@@ -135,7 +135,11 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
     let mut material_factors = Vec::with_capacity(doc.materials().len());
     let mut textures = super::gltf_textures::TextureLoader::new(doc.as_json(), &buffers, assets);
     for m in doc.materials() {
-        let (material, factors, transmitted) = convert_material(&m)?;
+        let Converted {
+            material,
+            factors,
+            transmitted,
+        } = convert_material(&m)?;
         let specular = material.brdf.is_specular();
         let id = scene.add_material(material);
         if let Some((weight, glass)) = transmitted {
@@ -462,9 +466,17 @@ fn spec_default_material() -> Result<Material> {
     })
 }
 
-/// The material, the glTF factors of its textures (its opaque part's when
-/// it transmits partly) and its transmitted part with that part's share.
-fn convert_material(m: &gltf::Material) -> Result<(Material, GltfMaterial, Option<(f32, Brdf)>)> {
+/// A glTF material as the scene takes it.
+struct Converted {
+    material: Material,
+    /// The factors its textures modulate: its opaque part's when it
+    /// transmits partly.
+    factors: GltfMaterial,
+    /// Its transmitted part and that part's share, when it transmits partly.
+    transmitted: Option<(f32, Brdf)>,
+}
+
+fn convert_material(m: &gltf::Material) -> Result<Converted> {
     let label = match m.index() {
         Some(i) => super::gltf_checks::label("material", i, m.name()),
         None => "the default material".to_string(),
@@ -514,7 +526,11 @@ fn convert_material(m: &gltf::Material) -> Result<(Material, GltfMaterial, Optio
         transmission: lobes.transmitted.map_or(input.transmission, |_| None),
         ..input
     };
-    Ok((material, factors, lobes.transmitted))
+    Ok(Converted {
+        material,
+        factors,
+        transmitted: lobes.transmitted,
+    })
 }
 
 /// `extras.cosn` of a material, 0 when absent.
