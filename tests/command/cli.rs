@@ -36,6 +36,26 @@ fn scene_json_lists_triangles_and_lights() {
 }
 
 #[test]
+fn scene_names_a_materials_transmitted_part() {
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/blender_frosted.glb");
+    let v = json(&["scene", file, "--json"]);
+    let materials = v["materials"].as_array().unwrap();
+    let frosted = materials.iter().find(|m| m["name"] == "frosted").unwrap();
+    assert_eq!(frosted["transmitted"]["weight"], 0.5);
+    let glass = &materials[frosted["transmitted"]["material"].as_u64().unwrap() as usize];
+    assert_eq!(glass["name"], "frosted (transmitted part)");
+    assert!(glass["brdf"].as_str().unwrap().starts_with("rough-dielectric"));
+    let floor = materials.iter().find(|m| m["name"] == "floor").unwrap();
+    assert_eq!(floor["transmitted"], Value::Null);
+    let (code, text, err) = run(&["scene", file]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.contains("transmits 0.5: `frosted (transmitted part)`"),
+        "{text}"
+    );
+}
+
+#[test]
 fn scene_json_shows_a_directional_light() {
     let file = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/sun_floor.gltf");
     let v = json(&["scene", file, "--json"]);
