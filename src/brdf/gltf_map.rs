@@ -49,22 +49,22 @@
 //! alone (`mix(dielectric, metal, metallic)`), so it is the opaque mapping.
 //!
 //! # Partial transmission
-//! `0 < transmissionFactor = t < 1` with `metallic = 0` is a mix
-//! ([`gltf_lobes`]). glTF's dielectric is
-//! `F spec + (1 - F) mix(diffuse, btdf, t)`, and since the specular
+//! `0 < transmissionFactor = t < 1`, or transmission on a partial metal
+//! (`0 < metallic = m < 1`), is a mix ([`gltf_lobes`]). glTF's dielectric
+//! is `F spec + (1 - F) mix(diffuse, btdf, t)`, and since the specular
 //! reflection `F spec` is the same in both parts, that is exactly
-//! `(1 - t) opaque + t glass`: the opaque mapping above and the glass
-//! mapping, of the same roughness, IOR and tint. The scene keeps the two
-//! parts as two materials and picks one per scattering event
+//! `(1 - t) opaque + t glass`. The material is `mix(dielectric, metal,
+//! m)`, so the glass part's share is `w = (1 - m) t`, and the rest,
+//! `m metal + (1 - m)(1 - t) opaque`, is the opaque mapping of metallic
+//! `m / (1 - w)`: [`GltfPbr`] is linear in `metallic` (its `f0` and its
+//! diffuse weight both are), so the split is exact. The glass part is the
+//! glass mapping of the same roughness, IOR and tint. The scene keeps the
+//! two parts as two materials and picks one per scattering event
 //! ([`crate::scene::TransmissionMix`]). Only a thin wall mixes
 //! (`thicknessFactor = 0`): a partly transmitting volume is refused.
-//! [`from_gltf_material`], which returns one BRDF, refuses partial
-//! transmission.
+//! [`from_gltf_material`], which returns one BRDF, refuses a mix.
 //!
-//! Not modelled, and refused rather than approximated: transmission on a
-//! partial metal (`0 < metallic < 1`, a mix of glass and metal, whose
-//! opaque part glTF's simplified BRDF does not mix linearly), and partial
-//! transmission of a volume. The extensions' textures are
+//! The extensions' textures are
 //! ignored (the opaque materials' base colour and metallic-roughness
 //! textures are read by the scene loader, which maps each point's factors
 //! here).
@@ -193,9 +193,13 @@ pub fn from_gltf_pbr(base_color: Vec3, metallic: f32, roughness: f32) -> Result<
 pub struct GltfLobes {
     /// The whole material, or its opaque part when it transmits partly.
     pub surface: Brdf,
-    /// When it transmits partly: `(transmissionFactor, glass)`, the share
-    /// of the glass part and its (thin, specular) model.
+    /// When it transmits partly: `(share, glass)`, the glass part's share
+    /// of the scattering and its (thin, specular) model.
     pub transmitted: Option<(f32, Brdf)>,
+    /// The factors `surface` is the mapping of: the material's own, or its
+    /// opaque part's when it transmits partly (no transmission, metallic
+    /// `m / (1 - share)`). Texels modulate these.
+    pub surface_factors: GltfMaterial,
 }
 
 /// Maps a glTF material with its transmission, IOR and volume extensions to a
@@ -208,18 +212,18 @@ pub struct GltfLobes {
 /// - `ior` is neither 0 nor in [1, 4];
 /// - `thicknessFactor` is negative or not finite, `attenuationDistance` is
 ///   not > 0, or an `attenuationColor` channel is outside [0, 1];
-/// - the material transmits partly (`0 < transmissionFactor < 1`), which
-///   one BRDF cannot hold ([`gltf_lobes`] maps it), or is a transmitting
-///   partial metal (`0 < metallic < 1`), which is not modelled (a full
-///   metal transmits nothing: its transmission is ignored).
+/// - the material transmits partly (`0 < transmissionFactor < 1`, or
+///   transmission on a partial metal, `0 < metallic < 1`), which one BRDF
+///   cannot hold ([`gltf_lobes`] maps it; a full metal transmits nothing:
+///   its transmission is ignored).
 pub fn from_gltf_material(m: &GltfMaterial) -> Result<Brdf> {
     let lobes = gltf_lobes(m)?;
     if let Some((t, _)) = lobes.transmitted {
         return Err(Error::param(
             "gltf transmissionFactor",
             format!(
-                "partial transmission ({t}) is a mix of two models, not one BRDF: map it with \
-                 gltf_lobes"
+                "partial transmission (a share {t} of glass) is a mix of two models, not one \
+                 BRDF: map it with gltf_lobes"
             ),
         ));
     }
@@ -227,13 +231,13 @@ pub fn from_gltf_material(m: &GltfMaterial) -> Result<Brdf> {
 }
 
 /// Maps a glTF material to its models: one BRDF, or for partial
-/// transmission (`0 < transmissionFactor < 1`, `metallic = 0`, a thin
-/// wall) the opaque part and the glass part with its share (module docs).
+/// transmission (`0 < transmissionFactor < 1`, or transmission on a
+/// partial metal; a thin wall) the opaque part and the glass part with its
+/// share (module docs).
 ///
 /// # Errors
-/// As [`from_gltf_material`], except that partial transmission of a thin
-/// dielectric is mapped; partial transmission of a volume
-/// (`thicknessFactor > 0`) is refused.
+/// As [`from_gltf_material`], except that a mix is mapped; partial
+/// transmission of a volume (`thicknessFactor > 0`) is refused.
 pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     let base_color = super::phong::check_rgb01("gltf baseColorFactor", m.base_color)?;
     for (name, v) in [
@@ -266,6 +270,7 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
         Ok(GltfLobes {
             surface,
             transmitted: None,
+            surface_factors: *m,
         })
     };
     // IOR 0: the Fresnel term is 1, no light enters, nothing is transmitted.
@@ -273,22 +278,19 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     if transmission == 0.0 || ior == 0.0 || metallic == 1.0 {
         return alone(opaque(base_color, metallic, roughness, dielectric_f0(ior))?);
     }
-    if metallic > 0.0 {
-        return Err(Error::param(
-            "gltf transmissionFactor",
-            format!(
-                "transmission on a metal is not modelled: transmissionFactor {transmission} with \
-                 metallicFactor {metallic} (glass has metallicFactor 0)"
-            ),
-        ));
-    }
+    // The glass part's share, and the rest: the metal and the opaque
+    // dielectric, which the opaque mapping mixes linearly in `metallic`.
+    let share = (1.0 - metallic) * transmission;
+    let rest = metallic + (1.0 - metallic) * (1.0 - transmission);
     let thin = volume.thickness == 0.0;
-    if transmission < 1.0 && !thin {
+    if rest > 0.0 && !thin {
         return Err(Error::param(
             "gltf transmissionFactor",
             format!(
-                "partial transmission ({transmission}) of a volume (thicknessFactor {}) is not \
-                 modelled: use transmissionFactor 1, or thicknessFactor 0 (a thin wall)",
+                "partial transmission of a volume is not modelled: transmissionFactor \
+                 {transmission}, metallicFactor {metallic} and thicknessFactor {} (a volume \
+                 needs transmissionFactor 1 and metallicFactor 0; a thin wall has \
+                 thicknessFactor 0)",
                 volume.thickness
             ),
         ));
@@ -300,12 +302,19 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     } else {
         RoughDielectric::new(alpha, ior, base_color, sigma_a, thin)?.into()
     };
-    if transmission == 1.0 {
+    if rest == 0.0 {
         return alone(glass);
     }
+    // `rest` is `metallic` exactly at transmissionFactor 1: a full metal.
+    let metal = (metallic / rest).min(1.0);
     Ok(GltfLobes {
-        surface: opaque(base_color, 0.0, roughness, dielectric_f0(ior))?,
-        transmitted: Some((transmission, glass)),
+        surface: opaque(base_color, metal, roughness, dielectric_f0(ior))?,
+        transmitted: Some((share, glass)),
+        surface_factors: GltfMaterial {
+            metallic: metal,
+            transmission: None,
+            ..*m
+        },
     })
 }
 
@@ -550,6 +559,42 @@ mod tests {
         // Whole glass and opaque stay one model.
         assert_eq!(gltf_lobes(&part(0.0, 1.0)).unwrap().transmitted, None);
         assert_eq!(gltf_lobes(&part(0.0, 0.0)).unwrap().transmitted, None);
+        // A transmitting partial metal: glass takes (1 - m) t, the rest is
+        // the opaque mapping of metallic m / (1 - (1 - m) t).
+        let metal = |metallic, t, roughness| GltfMaterial {
+            metallic,
+            ..part(roughness, t)
+        };
+        let lobes = gltf_lobes(&metal(0.5, 0.5, 0.5)).unwrap();
+        assert!(matches!(
+            lobes.transmitted,
+            Some((0.25, Brdf::RoughDielectric(_)))
+        ));
+        let Brdf::GltfPbr(rest) = lobes.surface else {
+            panic!("a partial metal's rest is the glTF BRDF")
+        };
+        assert!(
+            (rest.metallic() - 2.0 / 3.0).abs() < 1e-6,
+            "{}",
+            rest.metallic()
+        );
+        // Its factors map to it alone.
+        assert_eq!(lobes.surface_factors.transmission, None);
+        assert_eq!(
+            from_gltf_material(&lobes.surface_factors).unwrap(),
+            lobes.surface
+        );
+        // Whole transmission on a smooth partial metal: glass and a mirror.
+        let lobes = gltf_lobes(&metal(0.25, 1.0, 0.0)).unwrap();
+        assert!(matches!(
+            lobes.transmitted,
+            Some((0.75, Brdf::Dielectric(_)))
+        ));
+        assert!(
+            matches!(lobes.surface, Brdf::Mirror(_)),
+            "{:?}",
+            lobes.surface
+        );
         // A partly transmitting volume is refused by name.
         let volume = GltfMaterial {
             volume: Some(GltfVolume {
@@ -559,7 +604,10 @@ mod tests {
             ..part(0.0, 0.5)
         };
         let e = gltf_lobes(&volume).unwrap_err().to_string();
-        assert!(e.contains("of a volume") && e.contains("0.5"), "{e}");
+        assert!(
+            e.contains("of a volume") && e.contains("transmissionFactor 0.5"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -584,14 +632,17 @@ mod tests {
                     transmission: Some(0.5),
                     ..glass(0.0)
                 },
-                &["partial transmission (0.5) is a mix", "gltf_lobes"],
+                &[
+                    "partial transmission (a share 0.5 of glass) is a mix",
+                    "gltf_lobes",
+                ],
             ),
             (
                 GltfMaterial {
                     metallic: 0.25,
                     ..glass(0.0)
                 },
-                &["transmission on a metal is not modelled", "0.25"],
+                &["a share 0.75 of glass", "gltf_lobes"],
             ),
             (
                 GltfMaterial {

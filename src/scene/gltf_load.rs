@@ -520,15 +520,21 @@ fn convert_material(m: &gltf::Material) -> Result<Converted> {
         brdf,
         emission,
     };
-    // The textures of a partly transmitting material colour its opaque
+    // The glass part's share is one number per material: a texel's
+    // metallic would change it, on a transmitting partial metal.
+    let metal_texture = m.pbr_metallic_roughness().metallic_roughness_texture();
+    if lobes.transmitted.is_some() && input.metallic > 0.0 && metal_texture.is_some() {
+        return Err(Error::InvalidScene(format!(
+            "{label}: a transmitting partial metal (metallicFactor {}) with a \
+             metallicRoughnessTexture is not modelled (its glass share would vary by texel)",
+            input.metallic
+        )));
+    }
+    // The textures of a partly transmitting material modulate its opaque
     // part: its factors are that part's.
-    let factors = GltfMaterial {
-        transmission: lobes.transmitted.map_or(input.transmission, |_| None),
-        ..input
-    };
     Ok(Converted {
         material,
-        factors,
+        factors: lobes.surface_factors,
         transmitted: lobes.transmitted,
     })
 }

@@ -8,7 +8,8 @@
 //! opaque part, and a glass part added after it. Where light *arrives*
 //! nothing changes: photons are stored on the mixed surface with their
 //! whole power (a photon records the flux that reaches a point, whatever
-//! happens to it next), and emission, textures and alpha masks are the
+//! happens to it next) unless the opaque part is a mirror (a polished
+//! partial metal that transmits: no photon is stored on it), and emission, textures and alpha masks are the
 //! mesh's material's. Where light *scatters*, each event picks a part:
 //! the glass part with probability `w`, else the opaque part, and then
 //! scatters by that part alone with weight 1. The choice's probability is
@@ -35,14 +36,15 @@ pub struct TransmissionMix {
 }
 
 impl Scene {
-    /// Makes material `material` (its opaque part) let the share `weight`
+    /// Makes material `material` (its opaque part: a mirror, or a model that
+    /// stores photons) let the share `weight`
     /// of the light through by `glass`, a thin transmitting model, added
     /// as a material of its own (named after the material). Returns the
     /// glass part's index.
     ///
     /// # Errors
     /// [`Error::InvalidScene`] for an unknown material, one that is itself
-    /// specular or already mixed, a weight outside (0, 1), or a `glass`
+    /// glass or already mixed, a weight outside (0, 1), or a `glass`
     /// that does not transmit or bounds a volume (its interior would be
     /// entered by one part and not the other).
     pub fn set_transmission_mix(
@@ -58,8 +60,8 @@ impl Scene {
         };
         let name = m.name.clone();
         let refuse = |why: String| Err(Error::InvalidScene(format!("material `{name}`: {why}")));
-        if m.brdf.is_specular() {
-            return refuse("a mirror or glass cannot take a transmitted part".into());
+        if m.brdf.is_transmissive() {
+            return refuse("glass cannot take a transmitted part".into());
         }
         if self.transmission_mix(material as u32).is_some() {
             return refuse("it already has a transmitted part".into());
@@ -185,9 +187,14 @@ mod tests {
         let of_glass = s
             .set_transmission_mix(g, 0.5, thin_glass(true))
             .unwrap_err();
-        assert!(
-            of_glass.to_string().contains("mirror or glass"),
-            "{of_glass}"
-        );
+        assert!(of_glass.to_string().contains("glass cannot"), "{of_glass}");
+        // A mirror may (a polished partial metal that transmits).
+        let mirror = s.add_material(Material {
+            name: "mirror".into(),
+            brdf: crate::brdf::Mirror::new(Vec3::ONE).unwrap().into(),
+            emission: None,
+        });
+        s.set_transmission_mix(mirror, 0.5, thin_glass(true))
+            .unwrap();
     }
 }

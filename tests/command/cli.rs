@@ -44,7 +44,10 @@ fn scene_names_a_materials_transmitted_part() {
     assert_eq!(frosted["transmitted"]["weight"], 0.5);
     let glass = &materials[frosted["transmitted"]["material"].as_u64().unwrap() as usize];
     assert_eq!(glass["name"], "frosted (transmitted part)");
-    assert!(glass["brdf"].as_str().unwrap().starts_with("rough-dielectric"));
+    assert!(glass["brdf"]
+        .as_str()
+        .unwrap()
+        .starts_with("rough-dielectric"));
     let floor = materials.iter().find(|m| m["name"] == "floor").unwrap();
     assert_eq!(floor["transmitted"], Value::Null);
     let (code, text, err) = run(&["scene", file]);

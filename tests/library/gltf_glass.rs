@@ -199,6 +199,18 @@ fn partial_transmission_is_the_opaque_part_and_a_glass_part() {
         panic!("the glass part of roughness 0.5 is rough glass")
     };
     assert_eq!((r.alpha(), r.ior(), r.thin()), (0.25, 1.5, true));
+    // Whole transmission on a half metal, smooth: half glass, half mirror.
+    let metal = r#"{"metallicFactor":0.5,"roughnessFactor":0}"#;
+    let s = load(metal, &format!("{{{FULL}}}")).unwrap();
+    let i = s
+        .materials()
+        .iter()
+        .position(|m| m.name == "probe")
+        .unwrap();
+    assert!(matches!(s.materials()[i].brdf, Brdf::Mirror(_)));
+    let mix = s.transmission_mix(i as u32).unwrap();
+    assert_eq!(mix.weight, 0.5);
+    assert!(matches!(s.materials()[mix.glass].brdf, Brdf::Dielectric(_)));
     // Whole glass has no mix.
     let whole = load(SMOOTH, &format!("{{{FULL}}}")).unwrap();
     let i = whole
@@ -219,7 +231,7 @@ fn bad_transmission_ior_and_volume_values_are_refused_by_name() {
         ),
         (
             r#"{"KHR_materials_transmission":{"transmissionFactor":0.5},"KHR_materials_volume":{"thicknessFactor":1}}"#.to_string(),
-            "partial transmission (0.5) of a volume (thicknessFactor 1) is not modelled",
+            "partial transmission of a volume is not modelled: transmissionFactor 0.5",
         ),
         (
             format!(r#"{{{FULL},"KHR_materials_ior":{{"ior":0.5}}}}"#),
@@ -252,11 +264,12 @@ fn bad_transmission_ior_and_volume_values_are_refused_by_name() {
             "{extensions}: {msg}"
         );
     }
-    // Transmission on a metal is not glass.
+    // A transmitting partial metal with a volume mixes a volume too.
     let metal = r#"{"metallicFactor":0.5,"roughnessFactor":0}"#;
-    let msg = crate::common::chain(&load(metal, &format!("{{{FULL}}}")).unwrap_err());
+    let thick = format!(r#"{{{FULL},"KHR_materials_volume":{{"thicknessFactor":1}}}}"#);
+    let msg = crate::common::chain(&load(metal, &thick).unwrap_err());
     assert!(
-        msg.contains("transmission on a metal is not modelled") && msg.contains("0.5"),
+        msg.contains("partial transmission of a volume") && msg.contains("metallicFactor 0.5"),
         "{msg}"
     );
 }

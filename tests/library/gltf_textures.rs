@@ -423,3 +423,41 @@ fn a_floor_of_grey_vertex_colours_reflects_like_the_flat_product() {
         "the colours are read: {o} vs {c}"
     );
 }
+
+/// A partly transmitting floor (`KHR_materials_transmission` 0.5): the
+/// base colour texel colours its opaque part, the glass part takes the
+/// factors; on a transmitting partial metal a metallic-roughness texture
+/// is refused (the glass share would vary by texel).
+#[test]
+fn textures_colour_the_opaque_part_of_a_partly_transmitting_surface() {
+    let partly = |pbr: Value| {
+        json!({"name": "floor", "pbrMetallicRoughness": pbr,
+            "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5}}})
+    };
+    let pbr = json!({"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0,
+        "roughnessFactor": 1.0, "baseColorTexture": {"index": 0}});
+    let mut doc = floor_scene(Some((&four_colours(), NEAREST_CLAMP)), partly(pbr), false);
+    doc.extensions_used.push("KHR_materials_transmission");
+    let scene = load(&doc);
+    assert!(close(albedo_at(&scene, -1.0, -1.0), Vec3::X), "red");
+    assert!(close(albedo_at(&scene, 1.0, 1.0), Vec3::ONE), "white");
+    let floor = scene.meshes()[0].material;
+    let mix = scene.transmission_mix(floor as u32).unwrap();
+    assert_eq!(mix.weight, 0.5);
+    let Brdf::RoughDielectric(glass) = scene.materials()[mix.glass].brdf else {
+        panic!("roughness 1: rough glass")
+    };
+    assert_eq!(glass.tint(), Vec3::ONE, "the factor's tint");
+
+    let metal = json!({"metallicFactor": 0.5, "roughnessFactor": 1.0,
+        "metallicRoughnessTexture": {"index": 0}});
+    let mut doc = floor_scene(Some((&four_colours(), NEAREST_CLAMP)), partly(metal), false);
+    doc.extensions_used.push("KHR_materials_transmission");
+    let e = load_err(&doc);
+    assert!(
+        e.contains(
+            "transmitting partial metal (metallicFactor 0.5) with a metallicRoughnessTexture"
+        ),
+        "{e}"
+    );
+}
