@@ -287,7 +287,7 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
         return Err(Error::param(
             "gltf transmissionFactor",
             format!(
-                "partial transmission of a volume is not modelled: transmissionFactor \
+                "partial transmission of a volume is not supported: transmissionFactor \
                  {transmission}, metallicFactor {metallic} and thicknessFactor {} (a volume \
                  needs transmissionFactor 1 and metallicFactor 0; a thin wall has \
                  thicknessFactor 0)",

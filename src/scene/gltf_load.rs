@@ -22,10 +22,11 @@
 //! - Materials map to BRDFs by [`crate::brdf::gltf_map::gltf_lobes`]:
 //!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_transmission`
 //!   (glass) and `KHR_materials_volume` (thin wall or refracting volume,
-//!   absorption); partial transmission of a thin dielectric is its opaque
-//!   part and a glass part ([`super::TransmissionMix`]); a value outside
-//!   its range, partial transmission of a volume and transmission on a
-//!   partial metal are refused, naming the material.
+//!   absorption); partial transmission of a thin wall (or transmission on
+//!   a partial metal) is its opaque part and a glass part
+//!   ([`super::TransmissionMix`]); a value outside its range, partial
+//!   transmission of a volume and a transmitting partial metal with a
+//!   metallic-roughness texture are refused, naming the material.
 //! - Base colour and metallic-roughness textures multiply their factors
 //!   ([`super::gltf_textures`], [`super::textured`]); so does an
 //!   `emissiveTexture` the emission, making an area light whose radiance
@@ -526,7 +527,7 @@ fn convert_material(m: &gltf::Material) -> Result<Converted> {
     if lobes.transmitted.is_some() && input.metallic > 0.0 && metal_texture.is_some() {
         return Err(Error::InvalidScene(format!(
             "{label}: a transmitting partial metal (metallicFactor {}) with a \
-             metallicRoughnessTexture is not modelled (its glass share would vary by texel)",
+             metallicRoughnessTexture is not supported (its glass share would vary by texel)",
             input.metallic
         )));
     }

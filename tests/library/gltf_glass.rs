@@ -231,7 +231,7 @@ fn bad_transmission_ior_and_volume_values_are_refused_by_name() {
         ),
         (
             r#"{"KHR_materials_transmission":{"transmissionFactor":0.5},"KHR_materials_volume":{"thicknessFactor":1}}"#.to_string(),
-            "partial transmission of a volume is not modelled: transmissionFactor 0.5",
+            "partial transmission of a volume is not supported: transmissionFactor 0.5",
         ),
         (
             format!(r#"{{{FULL},"KHR_materials_ior":{{"ior":0.5}}}}"#),
