@@ -60,8 +60,9 @@
 //! diffuse weight both are), so the split is exact. The glass part is the
 //! glass mapping of the same roughness, IOR and tint. The scene keeps the
 //! two parts as two materials and picks one per scattering event
-//! ([`crate::scene::TransmissionMix`]). Only a thin wall mixes
-//! (`thicknessFactor = 0`): a partly transmitting volume is refused.
+//! ([`crate::scene::TransmissionMix`]). With a volume
+//! (`thicknessFactor > 0`) the glass part refracts, and the volume absorbs
+//! whatever part scatters at its boundary.
 //! [`from_gltf_material`], which returns one BRDF, refuses a mix.
 //!
 //! The extensions' textures are
@@ -232,12 +233,11 @@ pub fn from_gltf_material(m: &GltfMaterial) -> Result<Brdf> {
 
 /// Maps a glTF material to its models: one BRDF, or for partial
 /// transmission (`0 < transmissionFactor < 1`, or transmission on a
-/// partial metal; a thin wall) the opaque part and the glass part with its
-/// share (module docs).
+/// partial metal) the opaque part and the glass part with its share
+/// (module docs).
 ///
 /// # Errors
-/// As [`from_gltf_material`], except that a mix is mapped; partial
-/// transmission of a volume (`thicknessFactor > 0`) is refused.
+/// As [`from_gltf_material`], except that a mix is mapped.
 pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     let base_color = super::phong::check_rgb01("gltf baseColorFactor", m.base_color)?;
     for (name, v) in [
@@ -283,18 +283,6 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     let share = (1.0 - metallic) * transmission;
     let rest = metallic + (1.0 - metallic) * (1.0 - transmission);
     let thin = volume.thickness == 0.0;
-    if rest > 0.0 && !thin {
-        return Err(Error::param(
-            "gltf transmissionFactor",
-            format!(
-                "partial transmission of a volume is not supported: transmissionFactor \
-                 {transmission}, metallicFactor {metallic} and thicknessFactor {} (a volume \
-                 needs transmissionFactor 1 and metallicFactor 0; a thin wall has \
-                 thicknessFactor 0)",
-                volume.thickness
-            ),
-        ));
-    }
     let sigma_a = if thin { Vec3::ZERO } else { volume.sigma_a() };
     let alpha = roughness * roughness;
     let glass: Brdf = if alpha < RoughDielectric::MIN_ALPHA {
@@ -595,19 +583,19 @@ mod tests {
             "{:?}",
             lobes.surface
         );
-        // A partly transmitting volume is refused by name.
+        // A partly transmitting volume: its glass part refracts and absorbs.
         let volume = GltfMaterial {
             volume: Some(GltfVolume {
                 thickness: 1.0,
-                ..GltfVolume::default()
+                attenuation_distance: 2.0,
+                attenuation_color: Vec3::splat(0.5),
             }),
             ..part(0.0, 0.5)
         };
-        let e = gltf_lobes(&volume).unwrap_err().to_string();
-        assert!(
-            e.contains("of a volume") && e.contains("transmissionFactor 0.5"),
-            "{e}"
-        );
+        let Some((0.5, Brdf::Dielectric(d))) = gltf_lobes(&volume).unwrap().transmitted else {
+            panic!("a refracting glass part")
+        };
+        assert!(!d.thin() && d.attenuation().x > 0.0);
     }
 
     #[test]

@@ -164,7 +164,7 @@ fn shade_hit<C>(
     let mut power = p.power;
     if from_inside {
         // The segment just travelled lay inside this (closed) object.
-        if let Some(sigma) = brdf.interior_attenuation() {
+        if let Some(sigma) = ctx.scene.interior_attenuation(h.material) {
             power *= (-sigma * h.t).exp();
         }
     }

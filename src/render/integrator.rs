@@ -213,7 +213,7 @@ impl<'a> Ctx<'a> {
             let from_inside = h.ng.dot(dir) > 0.0;
             if from_inside {
                 // The segment just travelled lay inside this (closed) object.
-                if let Some(sigma) = material.brdf.interior_attenuation() {
+                if let Some(sigma) = self.scene.interior_attenuation(h.material) {
                     throughput *= (-sigma * h.t * ray.dir.length()).exp();
                 }
             }

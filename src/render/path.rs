@@ -203,7 +203,7 @@ impl<'a> PathTracer<'a> {
             let normal = h.facing(dir);
             if from_inside {
                 // The segment just travelled lay inside this (closed) object.
-                if let Some(sigma) = mat.brdf.interior_attenuation() {
+                if let Some(sigma) = self.scene.interior_attenuation(h.material) {
                     beta *= (-sigma * h.t * ray.dir.length()).exp();
                 }
             }

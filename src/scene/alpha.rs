@@ -190,7 +190,11 @@ impl Scene {
                     mask.cutoff
                 )));
             }
-            let refracts = match m.brdf {
+            // A partly transmitting material refracts by its glass part.
+            let glass = self
+                .transmission_mix(material as u32)
+                .map(|t| &self.materials[t.glass]);
+            let refracts = match glass.unwrap_or(m).brdf {
                 Brdf::Dielectric(d) => !d.thin(),
                 Brdf::RoughDielectric(d) => !d.thin(),
                 _ => false,

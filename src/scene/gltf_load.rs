@@ -22,11 +22,11 @@
 //! - Materials map to BRDFs by [`crate::brdf::gltf_map::gltf_lobes`]:
 //!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_transmission`
 //!   (glass) and `KHR_materials_volume` (thin wall or refracting volume,
-//!   absorption); partial transmission of a thin wall (or transmission on
-//!   a partial metal) is its opaque part and a glass part
-//!   ([`super::TransmissionMix`]); a value outside its range, partial
-//!   transmission of a volume and a transmitting partial metal with a
-//!   metallic-roughness texture are refused, naming the material.
+//!   absorption); partial transmission (or transmission on a partial
+//!   metal) is its opaque part and a glass part
+//!   ([`super::TransmissionMix`]); a value outside its range and a
+//!   transmitting partial metal with a metallic-roughness texture are
+//!   refused, naming the material.
 //! - Base colour and metallic-roughness textures multiply their factors
 //!   ([`super::gltf_textures`], [`super::textured`]); so does an
 //!   `emissiveTexture` the emission, making an area light whose radiance

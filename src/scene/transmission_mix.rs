@@ -1,6 +1,6 @@
 //! Materials that let part of the light through: glTF's
-//! `0 < transmissionFactor < 1` ([`crate::brdf::gltf_lobes`]), the BSDF
-//! `(1 - w) opaque + w glass`.
+//! `0 < transmissionFactor < 1`, or transmission on a partial metal
+//! ([`crate::brdf::gltf_lobes`]), the BSDF `(1 - w) opaque + w glass`.
 //!
 //! The engine decides per material where photons are stored (not on
 //! mirrors and glass) and where camera paths pass through (mirrors and
@@ -17,6 +17,11 @@
 //! `w glass + (1 - w) opaque`. A camera path that picks the opaque part
 //! reads the photon map there with the opaque part's BRDF, which counts
 //! the stored photons once: the store did not depend on the choice.
+//!
+//! A refracting glass part makes the material's meshes the boundary of a
+//! volume: what travels inside is absorbed by the glass part's attenuation
+//! ([`Scene::interior_attenuation`]) at the hit that ends the segment,
+//! whatever part then scatters there.
 //!
 //! Only mixed materials draw the choice's random number, so scenes
 //! without one draw the same numbers as before and give the same photons
@@ -37,16 +42,18 @@ pub struct TransmissionMix {
 
 impl Scene {
     /// Makes material `material` (its opaque part: a mirror, or a model that
-    /// stores photons) let the share `weight`
-    /// of the light through by `glass`, a thin transmitting model, added
-    /// as a material of its own (named after the material). Returns the
+    /// stores photons) let the share `weight` of the light through by
+    /// `glass`, a transmitting model, added as a material of its own
+    /// (named after the material); a refracting
+    /// `glass` makes the material's meshes the boundary of a volume, which
+    /// absorbs what crosses it whatever part scatters. Returns the
     /// glass part's index.
     ///
     /// # Errors
     /// [`Error::InvalidScene`] for an unknown material, one that is itself
-    /// glass or already mixed, a weight outside (0, 1), or a `glass`
-    /// that does not transmit or bounds a volume (its interior would be
-    /// entered by one part and not the other).
+    /// glass or already mixed, a weight outside (0, 1), a `glass` that
+    /// does not transmit, or a refracting (not thin) `glass` on a material
+    /// with an alpha mask (a volume's mesh must be closed).
     pub fn set_transmission_mix(
         &mut self,
         material: usize,
@@ -81,8 +88,12 @@ impl Scene {
                 ))
             }
         };
-        if !thin {
-            return refuse("its transmitted part must be a thin wall, not a volume".into());
+        if !thin && self.alpha_mask(material).is_some() {
+            return refuse(
+                "a refracting transmitted part needs a closed mesh, and the material has an \
+                 alpha mask"
+                    .into(),
+            );
         }
         let glass = self.add_material(super::Material {
             name: format!("{name} (transmitted part)"),
@@ -111,6 +122,18 @@ impl Scene {
         match self.transmission_mix(material) {
             Some(mix) if u() < mix.weight => mix.glass as u32,
             _ => material,
+        }
+    }
+
+    /// The absorption inside material `material`'s volume, when it bounds
+    /// one that absorbs: its own model's, or its glass part's (the interior
+    /// absorbs whatever part then scatters at the boundary).
+    #[inline]
+    pub fn interior_attenuation(&self, material: u32) -> Option<glam::Vec3> {
+        let own = self.materials.get(material as usize)?.brdf;
+        match self.transmission_mix(material) {
+            Some(mix) => self.materials[mix.glass].brdf.interior_attenuation(),
+            None => own.interior_attenuation(),
         }
     }
 
@@ -174,7 +197,6 @@ mod tests {
             (m, 1.0, thin_glass(true), "(0, 1), got 1"),
             (m, f32::NAN, thin_glass(true), "got NaN"),
             (m, 0.5, lambert, "must be glass"),
-            (m, 0.5, thin_glass(false), "not a volume"),
         ] {
             let e = s.set_transmission_mix(material, weight, glass).unwrap_err();
             assert!(e.to_string().contains(why), "{e}");

@@ -20,12 +20,12 @@ use std::sync::Arc;
 
 const IOR: f32 = 1.5;
 /// Fresnel reflectance at normal incidence, ((n - 1) / (n + 1))^2.
-const R0: f64 = 0.04;
+pub(crate) const R0: f64 = 0.04;
 /// The slab spans y in [SLAB_LO, SLAB_HI] across the whole box.
-const SLAB_LO: f32 = 0.4;
-const SLAB_HI: f32 = 0.6;
+pub(crate) const SLAB_LO: f32 = 0.4;
+pub(crate) const SLAB_HI: f32 = 0.6;
 
-fn black(s: &mut Scene) -> usize {
+pub(crate) fn black(s: &mut Scene) -> usize {
     s.add_material(Material {
         name: "black".into(),
         brdf: Lambert::new(Vec3::ZERO).unwrap().into(),
@@ -87,6 +87,22 @@ fn box_faces(lo: Vec3, hi: Vec3) -> Vec<[Vec3; 4]> {
 /// stored at its first black hit: above the glass when reflected, below it
 /// when transmitted.
 fn slab_scene(glass: Dielectric, thin: bool, tilt: f32) -> Scene {
+    let slab = |s: &mut Scene| {
+        s.add_material(Material {
+            name: "glass".into(),
+            brdf: glass.into(),
+            emission: None,
+        })
+    };
+    slab_scene_of(slab, thin, tilt)
+}
+
+/// [`slab_scene`] with the slab's material made by `slab`.
+pub(crate) fn slab_scene_of(
+    slab: impl FnOnce(&mut Scene) -> usize,
+    thin: bool,
+    tilt: f32,
+) -> Scene {
     let mut s = Scene::new();
     let wall = black(&mut s);
     add_quads(
@@ -96,11 +112,7 @@ fn slab_scene(glass: Dielectric, thin: bool, tilt: f32) -> Scene {
         Vec3::ZERO,
         wall,
     );
-    let g = s.add_material(Material {
-        name: "glass".into(),
-        brdf: glass.into(),
-        emission: None,
-    });
+    let g = slab(&mut s);
     // The glass reaches 1e-3 into the walls, so no photon slips round it.
     let (lo, hi) = (
         Vec3::new(-1e-3, SLAB_LO, -1e-3),

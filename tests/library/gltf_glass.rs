@@ -211,6 +211,19 @@ fn partial_transmission_is_the_opaque_part_and_a_glass_part() {
     let mix = s.transmission_mix(i as u32).unwrap();
     assert_eq!(mix.weight, 0.5);
     assert!(matches!(s.materials()[mix.glass].brdf, Brdf::Dielectric(_)));
+    // With a volume, the glass part refracts.
+    let volume = r#"{"KHR_materials_transmission":{"transmissionFactor":0.5},"KHR_materials_volume":{"thicknessFactor":1}}"#;
+    let s = load(SMOOTH, volume).unwrap();
+    let i = s
+        .materials()
+        .iter()
+        .position(|m| m.name == "probe")
+        .unwrap();
+    let mix = s.transmission_mix(i as u32).unwrap();
+    let Brdf::Dielectric(d) = s.materials()[mix.glass].brdf else {
+        panic!("smooth glass")
+    };
+    assert!(!d.thin());
     // Whole glass has no mix.
     let whole = load(SMOOTH, &format!("{{{FULL}}}")).unwrap();
     let i = whole
@@ -228,10 +241,6 @@ fn bad_transmission_ior_and_volume_values_are_refused_by_name() {
         (
             r#"{"KHR_materials_transmission":{"transmissionFactor":1.5}}"#.to_string(),
             "`gltf transmissionFactor`: must be in [0, 1], got 1.5",
-        ),
-        (
-            r#"{"KHR_materials_transmission":{"transmissionFactor":0.5},"KHR_materials_volume":{"thicknessFactor":1}}"#.to_string(),
-            "partial transmission of a volume is not supported: transmissionFactor 0.5",
         ),
         (
             format!(r#"{{{FULL},"KHR_materials_ior":{{"ior":0.5}}}}"#),
@@ -264,12 +273,4 @@ fn bad_transmission_ior_and_volume_values_are_refused_by_name() {
             "{extensions}: {msg}"
         );
     }
-    // A transmitting partial metal with a volume mixes a volume too.
-    let metal = r#"{"metallicFactor":0.5,"roughnessFactor":0}"#;
-    let thick = format!(r#"{{{FULL},"KHR_materials_volume":{{"thicknessFactor":1}}}}"#);
-    let msg = crate::common::chain(&load(metal, &thick).unwrap_err());
-    assert!(
-        msg.contains("partial transmission of a volume") && msg.contains("metallicFactor 0.5"),
-        "{msg}"
-    );
 }

@@ -18,6 +18,7 @@ use glam::Vec3;
 use std::path::Path;
 
 use super::caustic_pass::{material, quad};
+use super::glass_transport::{black, slab_scene_of, R0, SLAB_HI, SLAB_LO};
 use crate::common::{self, assert_sigmas, assert_within_noise, MeanVar};
 
 const IOR: f32 = 1.5;
@@ -136,6 +137,72 @@ fn photons_are_stored_on_the_sheet_and_pass_it_by_the_glass_share() {
         runs.std_error(),
         bound * runs.std_error(),
     );
+}
+
+/// The unit box's closed slab (y in [0.4, 0.6]) as a partly transmitting
+/// volume: black opaque part, glass part of share [`WEIGHT`] absorbing
+/// `sigma` per unit length. Straight down, a photon crosses the top face by
+/// the glass part (`w (1 - R)`), is attenuated by `a = exp(-sigma d)`,
+/// leaves by it (`w (1 - R)`), and may go round inside by two internal
+/// glass reflections (`(w R a)^2` each time); the opaque part, black,
+/// absorbs. To the floor: `w^2 (1 - R)^2 a / (1 - w^2 R^2 a^2)`. Stored on
+/// the bottom face from inside, whatever part then scatters, attenuated:
+/// `w (1 - R) a / (1 - w^2 R^2 a^2)`.
+#[test]
+fn a_partly_transmitting_volume_absorbs_whatever_part_scatters() {
+    let sigma = 2.0f32;
+    let slab = |s: &mut Scene| {
+        let m = black(s);
+        let glass = Dielectric::new(IOR, Vec3::ONE, Vec3::splat(sigma), false).unwrap();
+        s.set_transmission_mix(m, WEIGHT, glass.into()).unwrap();
+        m
+    };
+    let scene = slab_scene_of(slab, false, 0.0);
+    let tracer = Tracer::new(scene.clone().commit(&Device::new().unwrap()).unwrap());
+    let power = scene.lights()[0].power();
+    let power = f64::from(power.x + power.y + power.z) / 3.0;
+    let (w, a) = (
+        f64::from(WEIGHT),
+        (-f64::from(sigma) * f64::from(SLAB_HI - SLAB_LO)).exp(),
+    );
+    let round = 1.0 - (w * R0 * a).powi(2);
+    let want_floor = (w * (1.0 - R0)).powi(2) * a / round;
+    let want_inside = w * (1.0 - R0) * a / round;
+    // The spread of independent runs: a photon may store more than once.
+    let (mut floor, mut inside) = (MeanVar::default(), MeanVar::default());
+    for k in 0..8 {
+        let mut cfg = TraceConfig::new(Mode::Classic, Budget::NMax(40_000));
+        cfg.seed = common::seed(80 + k);
+        let out = tracer.trace(&cfg).unwrap();
+        let share = |keep: &dyn Fn(&adaptive_pm::photon_map::PhotonRecord) -> bool| {
+            let sum: f64 = out
+                .records()
+                .iter()
+                .filter(|r| keep(r))
+                .map(|r| f64::from(r.power.x + r.power.y + r.power.z) / 3.0)
+                .sum();
+            sum / power
+        };
+        floor.push(share(&|r| r.position.y < 1e-3));
+        // On the bottom face, arriving downwards: from inside.
+        inside.push(share(&|r| {
+            (r.position.y - SLAB_LO).abs() < 1e-3 && r.direction.y < 0.0
+        }));
+    }
+    let bound = common::family_bound(2, 7, 1e-4);
+    for (check, runs, want) in [
+        ("through the volume", &floor, want_floor),
+        ("stored inside, attenuated", &inside, want_inside),
+    ] {
+        assert_within_noise(
+            check,
+            runs.mean() - want,
+            runs.std_error(),
+            bound * runs.std_error(),
+        );
+    }
+    // Not the clear volume's: the attenuation is there.
+    assert!(inside.mean() < 0.8 * w * (1.0 - R0));
 }
 
 /// An emitting floor (radiance 1, facing up) under the sheet (black
