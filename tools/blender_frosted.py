@@ -60,15 +60,7 @@ def build():
     frosted, _ = base.principled("frosted", (0.9, 0.95, 1.0), roughness=0.3, transmission=0.5, ior=1.5)
     plane("pane", 1.2, frosted, (0.0, 0.0, 0.8))
 
-    panel = bpy.data.materials.new("panel_emission")
-    panel.use_nodes = True
-    nodes, links = panel.node_tree.nodes, panel.node_tree.links
-    nodes.clear()
-    out = nodes.new("ShaderNodeOutputMaterial")
-    em = nodes.new("ShaderNodeEmission")
-    em.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    em.inputs["Strength"].default_value = 20.0
-    links.new(em.outputs["Emission"], out.inputs["Surface"])
+    panel = base.emission("panel_emission", (1.0, 1.0, 1.0), 20.0)
     plane("panel", 0.6, panel, (0.2, 0.1, 2.0), (math.pi, 0.0, 0.0))
 
     cam = bpy.data.cameras.new("camera")

@@ -106,6 +106,21 @@ def principled(name, base, metallic=0.0, roughness=0.5, transmission=0.0, ior=1.
     return mat, bsdf
 
 
+def emission(name, color, strength):
+    """A material of a bare Emission shader."""
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    nodes.clear()
+    out = nodes.new("ShaderNodeOutputMaterial")
+    em = nodes.new("ShaderNodeEmission")
+    em.location = (-250, 0)
+    em.inputs["Color"].default_value = (*color, 1.0)
+    em.inputs["Strength"].default_value = strength
+    links.new(em.outputs["Emission"], out.inputs["Surface"])
+    return mat
+
+
 def checker_image(name, size=256, squares=8, light=(0.85, 0.78, 0.62), dark=(0.28, 0.16, 0.09)):
     """A size x size checkerboard, squares x squares, packed into the .blend (PNG)."""
     img = bpy.data.images.new(name, size, size, alpha=False)
@@ -193,16 +208,7 @@ def build():
     mesh_object("floor", floor_mesh)
 
     # Light panel: 1 m x 1 m at 2 m, face turned down, mirrored on x.
-    panel_mat = bpy.data.materials.new("panel_emission")
-    panel_mat.use_nodes = True
-    nodes, links = panel_mat.node_tree.nodes, panel_mat.node_tree.links
-    nodes.clear()
-    out = nodes.new("ShaderNodeOutputMaterial")
-    em = nodes.new("ShaderNodeEmission")
-    em.location = (-250, 0)
-    em.inputs["Color"].default_value = (1.0, 0.9, 0.75, 1.0)
-    em.inputs["Strength"].default_value = 15.0
-    links.new(em.outputs["Emission"], out.inputs["Surface"])
+    panel_mat = emission("panel_emission", (1.0, 0.9, 0.75), 15.0)
     panel_mat.use_backface_culling = False
     panel_mesh = primitive(bpy.ops.mesh.primitive_plane_add, size=1.0)
     panel_mesh.name = "panel"
