@@ -83,6 +83,16 @@ const SUPPORTED_REQUIRED: [&str; 9] = [
     "EXT_texture_webp",
 ];
 
+/// The extensions of `extensionsUsed` that the loader neither reads nor
+/// names elsewhere (a material's unread extension is named with its
+/// material): what they add to the file is ignored, which the loader says.
+pub(super) fn unread_extensions(root: &Root) -> impl Iterator<Item = &str> {
+    root.extensions_used
+        .iter()
+        .map(String::as_str)
+        .filter(|e| !SUPPORTED_REQUIRED.contains(e) && !e.starts_with("KHR_materials_"))
+}
+
 /// Checks the document's structure; no buffer data is needed.
 pub(super) fn check_document(root: &Root) -> Result<()> {
     // glTF 2.0: a loader must refuse a file that requires an extension it

@@ -131,6 +131,11 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
     let doc = &gltf.document;
 
     let mut scene = Scene::new();
+    for ext in super::gltf_checks::unread_extensions(doc.as_json()) {
+        scene.warnings.push(format!(
+            "the file uses the extension {ext}, which is not read: what it adds is ignored"
+        ));
+    }
     let mut material_ids = Vec::with_capacity(doc.materials().len());
     // The factors of each, for the maps that vertex colours need.
     let mut material_factors = Vec::with_capacity(doc.materials().len());

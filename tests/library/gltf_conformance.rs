@@ -530,9 +530,22 @@ fn an_unmodelled_extension_is_a_warning_and_morph_weights_are_applied() {
         1,
         "{w}"
     );
+    assert!(!w.contains("the file uses"), "named with its material: {w}");
     for (got, r) in scene.meshes()[0].positions.iter().zip(&reference) {
         assert!((*got - 1.5 * *r).length() < 1e-6, "{got} vs 1.5 x {r}");
     }
+    // An extension of a node (GPU instances would add copies of the mesh)
+    // is named once, for the file.
+    let mut instanced = v.clone();
+    instanced["extensionsUsed"] = json!(["KHR_materials_clearcoat", "EXT_mesh_gpu_instancing"]);
+    std::fs::write(&path, instanced.to_string()).unwrap();
+    let w = Scene::load(&path).unwrap().warnings().join("\n");
+    assert_eq!(
+        w.matches("the file uses the extension EXT_mesh_gpu_instancing, which is not read")
+            .count(),
+        1,
+        "{w}"
+    );
     // A node's weights override the mesh's: 0 leaves the floor as stored.
     v["nodes"][0]["weights"] = json!([0.0]);
     std::fs::write(&path, v.to_string()).unwrap();
