@@ -11,7 +11,8 @@
 //! walks every path, so the instances are counted first, bottom-up with
 //! saturating sums (one pass over the nodes, no expansion), and a graph
 //! over [`MAX_NODE_INSTANCES`] nodes or [`MAX_INSTANCED_TRIANGLES`]
-//! triangles is refused before any vertex is transformed.
+//! triangles is refused before any vertex is transformed; a node's GPU
+//! instances (`EXT_mesh_gpu_instancing`) multiply its mesh's triangles.
 
 use super::gltf_checks::{label, MAX_INSTANCED_TRIANGLES, MAX_NODE_INSTANCES};
 use crate::error::{Error, Result};
@@ -75,9 +76,10 @@ pub(super) fn check_graph(root: &Root) -> Result<()> {
                 continue;
             }
             let mut nodes = 1u64;
-            let mut tris = root.nodes[node]
-                .mesh
-                .map_or(0, |m| mesh_triangles(root, m.value()));
+            let copies = super::gltf_instancing::instance_count(root, node)?;
+            let mut tris = root.nodes[node].mesh.map_or(0, |m| {
+                mesh_triangles(root, m.value()).saturating_mul(copies)
+            });
             for c in children {
                 let (cn, ct) = done[c.value()].unwrap_or_default();
                 nodes = nodes.saturating_add(cn);

@@ -174,10 +174,11 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
     // The graph is acyclic and its expansion bounded (gltf_checks::check_document).
     while let Some((node, parent)) = stack.pop() {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let instances = super::gltf_instancing::transforms(&node, doc, &buffers)?;
         load_node(
             &mut scene,
             &node,
-            &world,
+            (&world, instances.as_deref()),
             (&buffers, &worlds),
             (&material_ids, &material_factors),
             &mut default_material,
@@ -262,11 +263,13 @@ fn warn_once(scene: &mut Scene, message: String) {
     }
 }
 
-/// One node's meshes, light and camera, in world space `world`.
+/// One node's meshes, light and camera, in world space `world`; its mesh
+/// once per instance when `instances` gives their transforms
+/// (`EXT_mesh_gpu_instancing`).
 fn load_node(
     scene: &mut Scene,
     node: &gltf::Node,
-    world: &Mat4,
+    (world, instances): (&Mat4, Option<&[Mat4]>),
     (buffers, worlds): (&[Vec<u8>], &[Option<Mat4>]),
     (material_ids, material_factors): (&[usize], &[GltfMaterial]),
     default_material: &mut Option<usize>,
@@ -277,115 +280,32 @@ fn load_node(
         ));
     }
     if let Some(mesh) = node.mesh() {
-        let mesh_label = super::gltf_checks::label("mesh", mesh.index(), mesh.name());
-        // A skinned mesh is posed by its joints and ignores its node's
-        // transform (glTF 2.0 §3.7.3.3).
-        let skin = match node.skin() {
-            Some(s) => Some(JointMatrices::of(&s, buffers, worlds)?),
-            None => None,
-        };
-        for (pi, prim) in mesh.primitives().enumerate() {
-            if !is_triangles(prim.mode()) {
-                scene.warnings.push(format!(
-                    "{mesh_label} primitive {pi} ({:?}) was skipped: only triangles are traced",
-                    prim.mode()
-                ));
-                continue;
-            }
-            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
-            let Some(positions) = prim.get(&Semantic::Positions) else {
+        if instances.is_some() && node.skin().is_some() {
+            return Err(Error::InvalidScene(format!(
+                "its skinned mesh has instances ({}): a skin ignores its node's transform, so \
+                 they would coincide",
+                super::gltf_instancing::EXT_MESH_GPU_INSTANCING
+            )));
+        }
+        let data = (buffers, worlds);
+        let materials = (material_ids, material_factors);
+        // Times the identity, a matrix is itself, bit for bit.
+        for (i, m) in instances.unwrap_or(&[Mat4::IDENTITY]).iter().enumerate() {
+            let placed = *world * *m;
+            if !placed.is_finite() {
                 return Err(Error::InvalidScene(format!(
-                    "{mesh_label} primitive {pi} has no POSITION attribute"
-                )));
-            };
-            let skinning = match &skin {
-                Some(joints) => {
-                    let s = Skinning::of(joints, &prim, buffers)?;
-                    if s.is_none() {
-                        warn_once(
-                            scene,
-                            format!(
-                                "{mesh_label} primitive {pi}: it has a skin but no JOINTS_0 \
-                                 and WEIGHTS_0: it is placed by its node"
-                            ),
-                        );
-                    }
-                    s
-                }
-                None => None,
-            };
-            let mut positions = read_f32_vectors::<3>(&positions, buffers)?;
-            morph(&mut positions, &prim, node, buffers, MorphTarget::positions)?;
-            if let Some(s) = skinning.as_ref().filter(|s| s.len() != positions.len()) {
-                return Err(Error::InvalidScene(format!(
-                    "{mesh_label} primitive {pi} has {} positions but {} joint weights",
-                    positions.len(),
-                    s.len()
+                    "its instance {i}'s world transform is not finite"
                 )));
             }
-            let positions: Vec<Vec3> = positions
-                .into_iter()
-                .enumerate()
-                .map(|(v, p)| match &skinning {
-                    Some(s) => s.point(v, Vec3::from(p)),
-                    None => world.transform_point3(Vec3::from(p)),
-                })
-                .collect();
-            // glTF 2.0 §3.7.4: a negative determinant mirrors the node, which
-            // reverses its triangles' winding (and so their front side).
-            let mirrored = match &skinning {
-                Some(s) => s.mirrors(),
-                None => glam::Mat3::from_mat4(*world).determinant() < 0.0,
-            };
-            let flat: Vec<u32> = match reader.read_indices() {
-                Some(i) => i.into_u32().collect(),
-                None => (0..positions.len() as u32).collect(),
-            };
-            let mut indices = triangle_list(prim.mode(), &flat);
-            if mirrored {
-                indices.iter_mut().for_each(|t| t.swap(1, 2));
-            }
-            let (material, factors) = match prim.material().index() {
-                Some(i) => (material_ids[i], material_factors[i]),
-                None => match *default_material {
-                    Some(id) => (id, spec_default_factors()),
-                    None => {
-                        let id = scene.add_material(spec_default_material()?);
-                        *default_material = Some(id);
-                        (id, spec_default_factors())
-                    }
-                },
-            };
-            // NORMAL: shading normals, by the inverse transpose of the node's matrix.
-            let normal_matrix = world.inverse().transpose();
-            let normals = match prim.get(&Semantic::Normals) {
-                Some(n) => {
-                    let mut n = read_f32_vectors::<3>(&n, buffers)?;
-                    morph(&mut n, &prim, node, buffers, MorphTarget::normals)?;
-                    Some(n)
-                }
-                None => None,
-            };
-            let normals: Option<Vec<Vec3>> = normals.map(|n| {
-                n.into_iter()
-                    .enumerate()
-                    .map(|(i, v)| match &skinning {
-                        Some(s) if i < s.len() => s.normal(i, Vec3::from(v)),
-                        _ => normal_matrix.transform_vector3(Vec3::from(v)),
-                    })
-                    .collect()
-            });
-            let name = format!("{}#{pi}", mesh.name().unwrap_or("mesh"));
-            let index = scene.add_mesh(name, positions, indices, material)?;
-            if let Some(n) = normals {
-                scene.set_vertex_normals(index, n)?;
-            }
-            let prim_label = format!("{mesh_label} primitive {pi}");
-            super::gltf_textures::load_texcoords(scene, index, &prim, buffers, &prim_label)?;
-            // A posed mesh's tangents are generated from its posed vertices.
-            let tangent_space = skinning.is_none().then_some(world);
-            super::gltf_textures::load_tangents(scene, index, &prim, buffers, tangent_space)?;
-            load_colors(scene, index, &prim, buffers, factors)?;
+            load_mesh(
+                scene,
+                node,
+                &mesh,
+                &placed,
+                data,
+                materials,
+                default_material,
+            )?;
         }
     }
     if let Some(light) = node.light() {
@@ -403,6 +323,130 @@ fn load_node(
                 vfov_deg: p.yfov().to_degrees(),
             })?;
         }
+    }
+    Ok(())
+}
+
+/// Mesh `mesh` of node `node` (its primitives, morph targets and skin) in
+/// world space `world`.
+fn load_mesh(
+    scene: &mut Scene,
+    node: &gltf::Node,
+    mesh: &gltf::Mesh,
+    world: &Mat4,
+    (buffers, worlds): (&[Vec<u8>], &[Option<Mat4>]),
+    (material_ids, material_factors): (&[usize], &[GltfMaterial]),
+    default_material: &mut Option<usize>,
+) -> Result<()> {
+    let mesh_label = super::gltf_checks::label("mesh", mesh.index(), mesh.name());
+    // A skinned mesh is posed by its joints and ignores its node's
+    // transform (glTF 2.0 §3.7.3.3).
+    let skin = match node.skin() {
+        Some(s) => Some(JointMatrices::of(&s, buffers, worlds)?),
+        None => None,
+    };
+    for (pi, prim) in mesh.primitives().enumerate() {
+        if !is_triangles(prim.mode()) {
+            scene.warnings.push(format!(
+                "{mesh_label} primitive {pi} ({:?}) was skipped: only triangles are traced",
+                prim.mode()
+            ));
+            continue;
+        }
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
+        let Some(positions) = prim.get(&Semantic::Positions) else {
+            return Err(Error::InvalidScene(format!(
+                "{mesh_label} primitive {pi} has no POSITION attribute"
+            )));
+        };
+        let skinning = match &skin {
+            Some(joints) => {
+                let s = Skinning::of(joints, &prim, buffers)?;
+                if s.is_none() {
+                    warn_once(
+                        scene,
+                        format!(
+                            "{mesh_label} primitive {pi}: it has a skin but no JOINTS_0 \
+                                 and WEIGHTS_0: it is placed by its node"
+                        ),
+                    );
+                }
+                s
+            }
+            None => None,
+        };
+        let mut positions = read_f32_vectors::<3>(&positions, buffers)?;
+        morph(&mut positions, &prim, node, buffers, MorphTarget::positions)?;
+        if let Some(s) = skinning.as_ref().filter(|s| s.len() != positions.len()) {
+            return Err(Error::InvalidScene(format!(
+                "{mesh_label} primitive {pi} has {} positions but {} joint weights",
+                positions.len(),
+                s.len()
+            )));
+        }
+        let positions: Vec<Vec3> = positions
+            .into_iter()
+            .enumerate()
+            .map(|(v, p)| match &skinning {
+                Some(s) => s.point(v, Vec3::from(p)),
+                None => world.transform_point3(Vec3::from(p)),
+            })
+            .collect();
+        // glTF 2.0 §3.7.4: a negative determinant mirrors the node, which
+        // reverses its triangles' winding (and so their front side).
+        let mirrored = match &skinning {
+            Some(s) => s.mirrors(),
+            None => glam::Mat3::from_mat4(*world).determinant() < 0.0,
+        };
+        let flat: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..positions.len() as u32).collect(),
+        };
+        let mut indices = triangle_list(prim.mode(), &flat);
+        if mirrored {
+            indices.iter_mut().for_each(|t| t.swap(1, 2));
+        }
+        let (material, factors) = match prim.material().index() {
+            Some(i) => (material_ids[i], material_factors[i]),
+            None => match *default_material {
+                Some(id) => (id, spec_default_factors()),
+                None => {
+                    let id = scene.add_material(spec_default_material()?);
+                    *default_material = Some(id);
+                    (id, spec_default_factors())
+                }
+            },
+        };
+        // NORMAL: shading normals, by the inverse transpose of the node's matrix.
+        let normal_matrix = world.inverse().transpose();
+        let normals = match prim.get(&Semantic::Normals) {
+            Some(n) => {
+                let mut n = read_f32_vectors::<3>(&n, buffers)?;
+                morph(&mut n, &prim, node, buffers, MorphTarget::normals)?;
+                Some(n)
+            }
+            None => None,
+        };
+        let normals: Option<Vec<Vec3>> = normals.map(|n| {
+            n.into_iter()
+                .enumerate()
+                .map(|(i, v)| match &skinning {
+                    Some(s) if i < s.len() => s.normal(i, Vec3::from(v)),
+                    _ => normal_matrix.transform_vector3(Vec3::from(v)),
+                })
+                .collect()
+        });
+        let name = format!("{}#{pi}", mesh.name().unwrap_or("mesh"));
+        let index = scene.add_mesh(name, positions, indices, material)?;
+        if let Some(n) = normals {
+            scene.set_vertex_normals(index, n)?;
+        }
+        let prim_label = format!("{mesh_label} primitive {pi}");
+        super::gltf_textures::load_texcoords(scene, index, &prim, buffers, &prim_label)?;
+        // A posed mesh's tangents are generated from its posed vertices.
+        let tangent_space = skinning.is_none().then_some(world);
+        super::gltf_textures::load_tangents(scene, index, &prim, buffers, tangent_space)?;
+        load_colors(scene, index, &prim, buffers, factors)?;
     }
     Ok(())
 }

@@ -33,6 +33,8 @@ mod gltf_graph;
 #[cfg(feature = "gltf")]
 mod gltf_images;
 #[cfg(feature = "gltf")]
+mod gltf_instancing;
+#[cfg(feature = "gltf")]
 mod gltf_load;
 #[cfg(feature = "gltf")]
 mod gltf_quantized;

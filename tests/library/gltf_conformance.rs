@@ -534,14 +534,14 @@ fn an_unmodelled_extension_is_a_warning_and_morph_weights_are_applied() {
     for (got, r) in scene.meshes()[0].positions.iter().zip(&reference) {
         assert!((*got - 1.5 * *r).length() < 1e-6, "{got} vs 1.5 x {r}");
     }
-    // An extension of a node (GPU instances would add copies of the mesh)
-    // is named once, for the file.
-    let mut instanced = v.clone();
-    instanced["extensionsUsed"] = json!(["KHR_materials_clearcoat", "EXT_mesh_gpu_instancing"]);
-    std::fs::write(&path, instanced.to_string()).unwrap();
+    // An extension outside the materials (an environment light here) is
+    // named once, for the file.
+    let mut lit = v.clone();
+    lit["extensionsUsed"] = json!(["KHR_materials_clearcoat", "EXT_lights_image_based"]);
+    std::fs::write(&path, lit.to_string()).unwrap();
     let w = Scene::load(&path).unwrap().warnings().join("\n");
     assert_eq!(
-        w.matches("the file uses the extension EXT_mesh_gpu_instancing, which is not read")
+        w.matches("the file uses the extension EXT_lights_image_based, which is not read")
             .count(),
         1,
         "{w}"
@@ -631,4 +631,142 @@ fn a_skinned_mesh_stands_where_its_joints_put_it() {
     doc.accessors[n - 1]["count"] = json!(1);
     let e = Scene::load(doc.write(dir.path())).unwrap_err().to_string();
     assert!(e.contains("skin 0") && e.contains("joint 1"), "{e}");
+}
+
+/// Adds an accessor of `count` elements of `kind` over `bytes` (component
+/// type `component`, normalized when `normalized`) and returns its index.
+fn raw_accessor(doc: &mut Doc, bytes: &[u8], component: u32, count: usize, kind: &str) -> usize {
+    let v = doc.view(bytes);
+    let normalized = component != 5126;
+    doc.accessors
+        .push(json!({"bufferView": v, "componentType": component,
+        "normalized": normalized, "count": count, "type": kind}));
+    doc.accessors.len() - 1
+}
+
+fn f32_bytes(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|c| c.to_le_bytes()).collect()
+}
+
+/// A floor square instanced three times by `EXT_mesh_gpu_instancing`
+/// (translations, a quarter turn about y as normalized SHORTs, a scale),
+/// under a node moved up by 1, and a lamp; `edit` may change the document
+/// and the extension's attributes.
+fn instanced_floor(edit: impl FnOnce(&mut Doc, &mut Value)) -> Doc {
+    let mut doc = Doc::default();
+    let (white, lamp) = (white(&mut doc), lamp(&mut doc, false));
+    let (p, i) = square(1.0, true);
+    let floor = doc.mesh(&p, &i, 4, Some(white));
+    let t = f32_bytes(&[0.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 5.0]);
+    let t = raw_accessor(&mut doc, &t, 5126, 3, "VEC3");
+    let half = (32767.0 * std::f32::consts::FRAC_1_SQRT_2).round() as i16;
+    let r: Vec<u8> = [0, 0, 0, 32767, 0, half, 0, half, 0, 0, 0, 32767i16]
+        .iter()
+        .flat_map(|c| c.to_le_bytes())
+        .collect();
+    let r = raw_accessor(&mut doc, &r, 5122, 3, "VEC4");
+    let s = f32_bytes(&[1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 2.0, 1.0, 2.0]);
+    let s = raw_accessor(&mut doc, &s, 5126, 3, "VEC3");
+    let id = raw_accessor(&mut doc, &f32_bytes(&[7.0, 8.0, 9.0]), 5126, 3, "SCALAR");
+    let mut attributes = json!({"TRANSLATION": t, "ROTATION": r, "SCALE": s, "_ID": id});
+    edit(&mut doc, &mut attributes);
+    doc.node(json!({"mesh": floor, "translation": [0.0, 1.0, 0.0],
+        "extensions": {"EXT_mesh_gpu_instancing": {"attributes": attributes}}}));
+    let (p, i) = square(0.5, false);
+    let l = doc.mesh(&p, &i, 4, Some(lamp));
+    doc.node(json!({"mesh": l, "translation": [0.0, 3.0, 0.0]}));
+    doc.extensions_used.push("EXT_mesh_gpu_instancing");
+    doc
+}
+
+#[test]
+fn gpu_instances_place_copies_of_a_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Scene::load(instanced_floor(|_, _| {}).write(dir.path())).unwrap();
+    assert!(scene.warnings().is_empty(), "{:?}", scene.warnings());
+    let meshes = scene.meshes();
+    assert_eq!(meshes.len(), 4, "three instances and the lamp");
+    let (p, _) = square(1.0, true);
+    let node = Mat4::from_translation(Vec3::Y);
+    let quarter = glam::Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
+    let instances = [
+        Mat4::IDENTITY,
+        Mat4::from_rotation_translation(quarter, Vec3::new(5.0, 0.0, 0.0)),
+        Mat4::from_scale_rotation_translation(
+            Vec3::new(2.0, 1.0, 2.0),
+            glam::Quat::IDENTITY,
+            Vec3::new(0.0, 0.0, 5.0),
+        ),
+    ];
+    for (mesh, instance) in meshes.iter().zip(instances) {
+        for (got, local) in mesh.positions.iter().zip(p) {
+            let want = (node * instance).transform_point3(Vec3::from(local));
+            // The quarter turn is stored as 16-bit normalized integers.
+            assert!(
+                (*got - want).length() < 1e-4,
+                "{}: {got} vs {want}",
+                mesh.name
+            );
+        }
+    }
+    // A file that requires the extension loads the same.
+    let path = instanced_floor(|_, _| {}).write(dir.path());
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    v["extensionsRequired"] = json!(["EXT_mesh_gpu_instancing"]);
+    std::fs::write(&path, v.to_string()).unwrap();
+    assert_eq!(Scene::load(&path).unwrap().meshes(), meshes);
+}
+
+#[test]
+fn bad_gpu_instances_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let refused = |edit: &dyn Fn(&mut Doc, &mut Value), words: &[&str]| {
+        let doc = instanced_floor(|d, a| edit(d, a));
+        let e = Scene::load(doc.write(dir.path())).unwrap_err().to_string();
+        assert!(words.iter().all(|w| e.contains(w)), "{words:?}: {e}");
+    };
+    refused(
+        &|d, a| {
+            let two = raw_accessor(d, &f32_bytes(&[0.0; 6]), 5126, 2, "VEC3");
+            a["SCALE"] = json!(two);
+        },
+        &["node 0", "one count", "SCALE has 2"],
+    );
+    refused(
+        &|_, a| a["COLOR"] = json!(0),
+        &["node 0", "attribute `COLOR` is not supported"],
+    );
+    refused(
+        &|_, a| a["TRANSLATION"] = json!(99),
+        &["node 0", "TRANSLATION names no accessor"],
+    );
+    refused(
+        &|d, a| {
+            let nan = raw_accessor(
+                d,
+                &f32_bytes(&[0.0, f32::NAN, 0.0].repeat(3)),
+                5126,
+                3,
+                "VEC3",
+            );
+            a["TRANSLATION"] = json!(nan);
+        },
+        &["node 0", "TRANSLATION holds NaN"],
+    );
+    // 2^22 instances (zeros: no bufferView) of 8 triangles: over the
+    // bound on the triangles a scene expands to, before a vertex is read.
+    refused(
+        &|d, a| {
+            d.accessors
+                .push(json!({"componentType": 5126, "count": 1 << 22, "type": "VEC3"}));
+            let big = d.accessors.len() - 1;
+            *a = json!({ "TRANSLATION": big });
+            let (p, idx) = square(1.0, true);
+            let many: Vec<u32> = idx.iter().copied().cycle().take(24).collect();
+            let m = d.mesh(&p, &many, 4, Some(0));
+            d.meshes[0] = d.meshes[m].clone();
+        },
+        // 2^25 floor triangles and the lamp's 2.
+        &["scene 0 expands to 33554434 triangles, over the limit"],
+    );
 }

@@ -53,6 +53,21 @@ const INVALID_BUT_ACCEPTED: &[(&str, &str)] = &[];
 /// that wrote them (a prefix of the file name), and why.
 const GENERATED_VALID_BUT_REFUSED: &[(&str, &str)] = &[
     (
+        "gltf_conformance__bad_gpu_instances_are_refused_by_name-1",
+        "EXT_mesh_gpu_instancing attributes of two counts: the extension asks for one, and \
+         the validator does not check this extension",
+    ),
+    (
+        "gltf_conformance__bad_gpu_instances_are_refused_by_name-3",
+        "an EXT_mesh_gpu_instancing attribute naming no accessor: the validator does not \
+         check this extension",
+    ),
+    (
+        "gltf_conformance__bad_gpu_instances_are_refused_by_name-5",
+        "2^22 GPU instances of 8 triangles: over the loader's bound on the triangles a \
+         scene expands to",
+    ),
+    (
         "gltf_textures__bad_texture_data_is_refused_by_name-5",
         "a sampler's wrapS of 1234, not a glTF wrap mode: the validator only warns \
          (VALUE_NOT_IN_LIST), and the loader will not guess a wrap mode",
