@@ -419,6 +419,55 @@ fn files_the_khronos_validator_calls_invalid_are_refused_with_a_reason() {
     }
 }
 
+/// `assets/blender_scene_instanced.glb`: gltfpack 1.3 (`npm install
+/// gltfpack@1.3.0`) over the Blender export, `gltfpack -i
+/// assets/blender_scene.glb -o assets/blender_scene_instanced.glb -mi`,
+/// which turns the three pillars sharing one mesh into GPU instances
+/// (`EXT_mesh_gpu_instancing`, required) and quantizes the vertices
+/// (`KHR_mesh_quantization`). Each material keeps its meshes, each mesh its
+/// triangles, area and place, to the quantization's step.
+#[test]
+fn gltfpacks_gpu_instances_are_blenders_pillars() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let blender = Scene::load(root.join("assets/blender_scene.glb")).unwrap();
+    let packed = Scene::load(root.join("assets/blender_scene_instanced.glb")).unwrap();
+    assert!(packed.warnings().is_empty(), "{:?}", packed.warnings());
+    assert_eq!(packed.triangle_count(), blender.triangle_count());
+    // Per material, its meshes' (triangles, area, bounding-box centre), in
+    // the order of their centres' x.
+    let meshes = |s: &Scene, material: &str| {
+        let mut v: Vec<(usize, f64, Vec3)> = s
+            .meshes()
+            .iter()
+            .filter(|m| s.materials()[m.material].name == material)
+            .map(|m| {
+                let lo = m.positions.iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
+                let hi = m
+                    .positions
+                    .iter()
+                    .fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+                (m.indices.len(), m.area(), (lo + hi) * 0.5)
+            })
+            .collect();
+        v.sort_by(|a, b| a.2.x.total_cmp(&b.2.x));
+        v
+    };
+    for m in blender.materials() {
+        let (a, b) = (meshes(&blender, &m.name), meshes(&packed, &m.name));
+        assert_eq!(a.len(), b.len(), "{}", m.name);
+        for ((ta, aa, ca), (tb, ab, cb)) in a.iter().zip(&b) {
+            assert_eq!(ta, tb, "{}", m.name);
+            assert!((aa - ab).abs() < 5e-3 * aa, "{}: area {aa} vs {ab}", m.name);
+            assert!(
+                (*ca - *cb).length() < 2e-3,
+                "{}: centre {ca} vs {cb}",
+                m.name
+            );
+        }
+    }
+    assert_eq!(meshes(&packed, "blue_clay").len(), 3, "three pillars");
+}
+
 /// The scene Blender 3.4's own exporter wrote (`tools/blender_scene.py`):
 /// its lamp is mirrored (a negative determinant) and double-sided, so its
 /// floor is lit only if both are read; it traces and renders.
