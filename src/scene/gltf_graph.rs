@@ -12,7 +12,8 @@
 //! saturating sums (one pass over the nodes, no expansion), and a graph
 //! over [`MAX_NODE_INSTANCES`] nodes or [`MAX_INSTANCED_TRIANGLES`]
 //! triangles is refused before any vertex is transformed; a node's GPU
-//! instances (`EXT_mesh_gpu_instancing`) multiply its mesh's triangles.
+//! instances (`EXT_mesh_gpu_instancing`) count as node instances, and
+//! multiply its mesh's triangles.
 
 use super::gltf_checks::{label, MAX_INSTANCED_TRIANGLES, MAX_NODE_INSTANCES};
 use crate::error::{Error, Result};
@@ -75,8 +76,9 @@ pub(super) fn check_graph(root: &Root) -> Result<()> {
                 }
                 continue;
             }
-            let mut nodes = 1u64;
+            // A node's GPU instances count as node instances too.
             let copies = super::gltf_instancing::instance_count(root, node)?;
+            let mut nodes = copies;
             let mut tris = root.nodes[node].mesh.map_or(0, |m| {
                 mesh_triangles(root, m.value()).saturating_mul(copies)
             });

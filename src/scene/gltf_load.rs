@@ -347,10 +347,14 @@ fn load_mesh(
     };
     for (pi, prim) in mesh.primitives().enumerate() {
         if !is_triangles(prim.mode()) {
-            scene.warnings.push(format!(
-                "{mesh_label} primitive {pi} ({:?}) was skipped: only triangles are traced",
-                prim.mode()
-            ));
+            // Once, however many nodes or GPU instances place the mesh.
+            warn_once(
+                scene,
+                format!(
+                    "{mesh_label} primitive {pi} ({:?}) was skipped: only triangles are traced",
+                    prim.mode()
+                ),
+            );
             continue;
         }
         let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));

@@ -802,20 +802,27 @@ fn bad_gpu_instances_are_refused_by_name() {
         },
         &["node 0", "TRANSLATION holds NaN"],
     );
-    // 2^22 instances (zeros: no bufferView) of 8 triangles: over the
-    // bound on the triangles a scene expands to, before a vertex is read.
-    refused(
-        &|d, a| {
+    // Instances (zeros: no bufferView) count as node instances, and
+    // multiply their mesh's triangles: both bounds hold before a vertex is
+    // read.
+    let instances = |count: u64, triangles: usize| {
+        move |d: &mut Doc, a: &mut Value| {
             d.accessors
-                .push(json!({"componentType": 5126, "count": 1 << 22, "type": "VEC3"}));
-            let big = d.accessors.len() - 1;
-            *a = json!({ "TRANSLATION": big });
+                .push(json!({"componentType": 5126, "count": count, "type": "VEC3"}));
+            *a = json!({ "TRANSLATION": d.accessors.len() - 1 });
             let (p, idx) = square(1.0, true);
-            let many: Vec<u32> = idx.iter().copied().cycle().take(24).collect();
+            let many: Vec<u32> = idx.iter().copied().cycle().take(3 * triangles).collect();
             let m = d.mesh(&p, &many, 4, Some(0));
             d.meshes[0] = d.meshes[m].clone();
-        },
-        // 2^25 floor triangles and the lamp's 2.
-        &["scene 0 expands to 33554434 triangles, over the limit"],
+        }
+    };
+    refused(
+        &instances(1 << 21, 2),
+        &["scene 0 expands to 2097153 node instances"],
+    );
+    // 700 000 instances of 32 triangles, and the lamp's 2.
+    refused(
+        &instances(700_000, 32),
+        &["scene 0 expands to 22400002 triangles, over the limit"],
     );
 }

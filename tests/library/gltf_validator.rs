@@ -64,8 +64,13 @@ const GENERATED_VALID_BUT_REFUSED: &[(&str, &str)] = &[
     ),
     (
         "gltf_conformance__bad_gpu_instances_are_refused_by_name-5",
-        "2^22 GPU instances of 8 triangles: over the loader's bound on the triangles a \
-         scene expands to",
+        "2^21 GPU instances: over the loader's bound on the node instances a scene \
+         expands to",
+    ),
+    (
+        "gltf_conformance__bad_gpu_instances_are_refused_by_name-6",
+        "700 000 GPU instances of 32 triangles: over the loader's bound on the triangles \
+         a scene expands to",
     ),
     (
         "gltf_textures__bad_texture_data_is_refused_by_name-5",
