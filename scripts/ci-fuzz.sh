@@ -14,6 +14,9 @@ fi
 CORPUS=fuzz/corpus/scene_load
 mkdir -p "$CORPUS"
 cp -n assets/*.gltf tests/hostile/*.gltf "$CORPUS"/ 2>/dev/null || true
+# The documents the tests write (kept by scripts/ci-gltf-validator-generated.sh,
+# which scripts/test.sh runs first): one seed per feature the tests exercise.
+cp -n target/generated-gltf/*.gltf "$CORPUS"/ 2>/dev/null || true
 for f in tests/hostile/fuzz-* tests/hostile/crash-*; do
     [ -e "$f" ] && cp -n "$f" "$CORPUS"/
 done
