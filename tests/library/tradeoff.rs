@@ -180,6 +180,17 @@ fn reference_cache_is_keyed_by_content_not_path() {
     let mut sc = sa.clone();
     sc.set_cosn(adaptive_pm::emitter::CosN::new(20.0).unwrap());
     assert_ne!(scene_hash(&sa), scene_hash(&sc));
+    // Two shares of glass in one material, whose parts are the same models.
+    let glass: adaptive_pm::brdf::Brdf =
+        adaptive_pm::brdf::Dielectric::new(1.5, glam::Vec3::ONE, glam::Vec3::ZERO, true)
+            .unwrap()
+            .into();
+    let share = |w: f32| {
+        let mut s = sa.clone();
+        s.set_transmission_mix(0, w, glass).unwrap();
+        scene_hash(&s)
+    };
+    assert_ne!(share(0.3), share(0.5));
     let mut cfg = small(vec![1_000], 2);
     cfg.point_samples = 2;
     cfg.cache_dir = Some(dir.join("cache"));

@@ -77,8 +77,8 @@ fn fnv(bytes: &[u8], mut h: u64) -> u64 {
     h
 }
 
-/// A hash of what the scene *is*: geometry, materials, textures (emissive ones
-/// too), lights and camera
+/// A hash of what the scene *is*: geometry, materials (with their
+/// transmitted parts' shares), textures (emissive ones too), lights and camera
 /// (their exact float values through `Debug`), not where it came from.
 pub fn scene_hash(scene: &Scene) -> u64 {
     let text = format!(
@@ -92,6 +92,10 @@ pub fn scene_hash(scene: &Scene) -> u64 {
     }
     if scene.alpha_masks.iter().any(Option::is_some) {
         h = fnv(format!("{:?}", scene.alpha_masks).as_bytes(), h);
+    }
+    // A partly transmitting material's share is not in its materials.
+    if scene.transmission_mixes.iter().any(Option::is_some) {
+        h = fnv(format!("{:?}", scene.transmission_mixes).as_bytes(), h);
     }
     for t in &scene.textures {
         let head = format!("{}x{} {:?}", t.width(), t.height(), t.sampler);
