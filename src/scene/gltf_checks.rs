@@ -173,6 +173,23 @@ pub(super) fn check_document(root: &Root) -> Result<()> {
     for (i, n) in root.nodes.iter().enumerate() {
         check_node(root, i, n, lights.len())?;
     }
+    // The gltf crate unwraps a skin's indices when asked for its parts.
+    for (i, skin) in root.skins.iter().enumerate() {
+        let name = label("skin", i, skin.name.as_deref());
+        for &j in &skin.joints {
+            index_ok(&format!("{name} joint"), j, root.nodes.len())?;
+        }
+        if let Some(s) = skin.skeleton {
+            index_ok(&format!("{name} skeleton"), s, root.nodes.len())?;
+        }
+        if let Some(a) = skin.inverse_bind_matrices {
+            index_ok(
+                &format!("{name} inverseBindMatrices"),
+                a,
+                root.accessors.len(),
+            )?;
+        }
+    }
     if let Some(s) = root.scene {
         index_ok("the default scene", s, root.scenes.len())?;
     }
@@ -328,6 +345,9 @@ fn check_node(root: &Root, i: usize, n: &json::Node, lights: usize) -> Result<()
     }
     if let Some(c) = n.camera {
         index_ok(&name, c, root.cameras.len())?;
+    }
+    if let Some(s) = n.skin {
+        index_ok(&format!("{name} skin"), s, root.skins.len())?;
     }
     for &c in n.children.iter().flatten() {
         index_ok(&format!("{name} child"), c, root.nodes.len())?;

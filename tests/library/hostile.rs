@@ -64,6 +64,12 @@ fn what_panicked_in_the_gltf_crate_is_an_error() {
     expect("mesh_index_out_of_range.gltf", &["node 0 (`floor`)", "7"]);
     // Found by the fuzzer: the gltf crate's reader computes `count - 1`.
     expect("fuzz-accessor-count-0.gltf", &["count 0"]);
+    // Found by the fuzzer seeded with the tests' documents: a node's skin
+    // index past the skins, which the gltf crate unwraps.
+    expect(
+        "fuzz-node-skin-out-of-range.gltf",
+        &["node 0", "skin refers to index"],
+    );
 }
 
 #[test]
