@@ -53,11 +53,18 @@ impl Cone {
         2.0 * PI * self.one_minus_cos
     }
 
-    /// Whether the unit direction `w` is in the cone (its boundary included).
+    /// Whether the unit direction `w` is in the cone (its boundary
+    /// included, with a rim a few float roundings wide).
     pub fn contains(&self, w: Vec3) -> bool {
         // 1 - cos = |w - axis|^2 / 2 for unit vectors, without the
-        // cancellation of 1 - dot near the axis.
-        0.5 * (w - self.axis).length_squared() <= self.one_minus_cos
+        // cancellation of 1 - dot near the axis. A direction `sample` draws
+        // on the rim carries an error of a few ulps per component, which
+        // moves |w - axis|^2 / 2 by about |w - axis| times it: the rim
+        // allows 8 ulps of that, so that the cone drawn holds its own
+        // sample for the mixture's pdf as it does for the sampler's.
+        let omc = self.one_minus_cos;
+        let rim = 8.0 * f32::EPSILON * (omc + (2.0 * omc).sqrt());
+        0.5 * (w - self.axis).length_squared() <= omc + rim
     }
 
     /// The direction of `u` uniform in the cone's solid angle.

@@ -73,6 +73,12 @@ pub(crate) struct MapSample {
     pub bary: (f32, f32),
     /// Area pdf (world) of the point.
     pub pdf_area: f32,
+    /// The radiance of a `NEAREST` cell, constant over the piece: the
+    /// photon's weight takes it from the piece drawn, not from a lookup at
+    /// the point, whose rounding may land on the neighbouring texel (a weight
+    /// of that texel's radiance over this one's pdf: a firefly where a dim
+    /// texel borders a bright one). `None`: read at the point.
+    pub radiance: Option<Vec3>,
 }
 
 /// A textured light's radiance and its power distribution.
@@ -306,8 +312,16 @@ impl EmissionMap {
                 triangle: t,
                 bary: (b1, 1.0 - b0 - b1),
                 pdf_area: (q / f64::from(piece.area)) as f32,
+                radiance: None,
             };
         }
+        let radiance = (self.texture.sampler.filter == Filter::Nearest).then(|| {
+            let [i, j] = piece.cell;
+            let texel = self
+                .texture
+                .texel(i64::from(i), i64::from(j), Encoding::Srgb);
+            self.factor * texel.truncate()
+        });
         let tv = self.texel_space(t);
         let poly = Poly::triangle(tv).cell(piece.cell);
         let total = poly.area();
@@ -327,6 +341,7 @@ impl EmissionMap {
                 triangle: t,
                 bary: (1.0 / 3.0, 1.0 / 3.0),
                 pdf_area: (q / f64::from(piece.area)) as f32,
+                radiance,
             };
         };
         let (c0, c1) = uniform_triangle([u0, u[1]]);
@@ -343,6 +358,7 @@ impl EmissionMap {
                 b2.clamp(0.0, 1.0 - b1.clamp(0.0, 1.0)) as f32,
             ),
             pdf_area: (q / world_area) as f32,
+            radiance,
         }
     }
 

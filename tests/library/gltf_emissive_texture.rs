@@ -255,6 +255,7 @@ fn photons_leave_each_texel_in_proportion_to_its_power() {
         let power = light.power();
         let mut rng = Rng::new(common::seed(11));
         let mut counts = [0u32; 16];
+        let mut inside_black = 0u32;
         let mut weighted = [[0.0f64; 2]; 16];
         for _ in 0..n {
             let e = light.sample(rng.next_f32(), rng.next_2d(), rng.next_2d());
@@ -263,6 +264,9 @@ fn photons_leave_each_texel_in_proportion_to_its_power() {
             let k = (u * 4.0).floor().clamp(0.0, 3.0) as usize
                 + 4 * (v * 4.0).floor().clamp(0.0, 3.0) as usize;
             counts[k] += 1;
+            // A point within rounding of a texel line may bin either side.
+            let off_lines = |x: f32| ((x * 4.0) - (x * 4.0).round()).abs() > 1e-4;
+            inside_black += u32::from(k == 5 && off_lines(u) && off_lines(v));
             let w = f64::from(e.weight.x * power.x) / f64::from(n);
             weighted[k][0] += w;
             weighted[k][1] += w * w;
@@ -277,7 +281,12 @@ fn photons_leave_each_texel_in_proportion_to_its_power() {
             f64::from(luminance(Vec3::from(p.map(|c| c as f32))))
         };
         if sampler == NEAREST_CLAMP {
-            assert_eq!(counts[5], 0, "the black texel emits no photon");
+            assert_eq!(inside_black, 0, "the black texel emits no photon");
+            assert!(
+                counts[5] <= 2,
+                "{} photons on the black texel's edges",
+                counts[5]
+            );
             let total: f64 = (0..16).map(texel_luminance).sum();
             let (k, z) = (0..16)
                 .map(|k| {

@@ -121,7 +121,7 @@ impl AreaLight {
             position: a * (1.0 - b1 - b2) + b * b1 + c * b2,
             normal: self.frames[s.triangle].n,
             triangle: s.triangle,
-            radiance: m.radiance(s.triangle, s.bary),
+            radiance: s.radiance.unwrap_or_else(|| m.radiance(s.triangle, s.bary)),
             pdf_area: s.pdf_area,
         }
     }
