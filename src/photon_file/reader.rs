@@ -229,7 +229,14 @@ pub fn read_render_maps(
     if header.scene_hash != super::scene_hash(scene) {
         return Err(Error::param(
             "photon file",
-            format!("{} was traced in another scene", path.display()),
+            // The hash covers everything this build knows of a scene, so a
+            // release that reads more of a file (a material's new field) sees
+            // the same file as another scene: say so rather than blame it.
+            format!(
+                "{} was traced in another scene (or by a release of adaptive-pm \
+                 that read this scene's file differently: trace it again)",
+                path.display()
+            ),
         ));
     }
     let (header, full) = read_open_map(reader, |_| true)?;
