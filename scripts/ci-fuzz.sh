@@ -13,7 +13,7 @@ if ! cargo +nightly fuzz --version >/dev/null 2>&1; then
 fi
 CORPUS=fuzz/corpus/scene_load
 mkdir -p "$CORPUS"
-cp -n assets/*.gltf tests/hostile/*.gltf "$CORPUS"/ 2>/dev/null || true
+cp -n assets/*.gltf tests/hostile/*.gltf tests/gltf/*.gltf "$CORPUS"/ 2>/dev/null || true
 # The documents the tests write (kept by scripts/ci-gltf-validator-generated.sh,
 # which scripts/test.sh runs first): one seed per feature the tests exercise.
 cp -n target/generated-gltf/*.gltf "$CORPUS"/ 2>/dev/null || true

@@ -36,6 +36,11 @@ pub(super) fn load_buffers(
     for (i, b) in root.buffers.iter().enumerate() {
         let want = b.byte_length.0;
         let data = match b.uri.as_deref() {
+            // A compressing writer's fallback: the views decoded into it are
+            // all it holds (the GLB chunk is buffer 0's, never a fallback's).
+            None if (i > 0 || blob.is_none()) && super::gltf_meshopt::is_fallback(root, i) => {
+                vec![0; want as usize]
+            }
             None => blob.take().ok_or_else(|| {
                 Error::InvalidScene(format!(
                     "buffer {i} has no uri and there is no GLB binary chunk"

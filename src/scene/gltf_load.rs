@@ -124,7 +124,9 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
             .ok_or_else(|| wrap(e))?,
     };
     super::gltf_checks::check_document(gltf.document.as_json())?;
-    let buffers = super::buffers::load_buffers(gltf.document.as_json(), gltf.blob.clone(), assets)?;
+    let mut buffers =
+        super::buffers::load_buffers(gltf.document.as_json(), gltf.blob.clone(), assets)?;
+    super::gltf_meshopt::decode_views(gltf.document.as_json(), &mut buffers)?;
     super::gltf_data::check_data(gltf.document.as_json(), &buffers)?;
     super::gltf_graph::check_graph(gltf.document.as_json())?;
     super::gltf_graph::check_forest(gltf.document.as_json())?;

@@ -37,6 +37,8 @@ mod gltf_instancing;
 #[cfg(feature = "gltf")]
 mod gltf_load;
 #[cfg(feature = "gltf")]
+mod gltf_meshopt;
+#[cfg(feature = "gltf")]
 mod gltf_quantized;
 // Valid files the gltf crate's schema refuses, rewritten to read.
 #[cfg(feature = "gltf")]

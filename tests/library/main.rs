@@ -36,6 +36,7 @@ mod gltf_conformance;
 mod gltf_doc;
 mod gltf_emissive_texture;
 mod gltf_glass;
+mod gltf_meshopt;
 mod gltf_normal_texture;
 mod gltf_quantized;
 mod gltf_textures;

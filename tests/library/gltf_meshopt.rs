@@ -1,0 +1,165 @@
+//! `EXT_meshopt_compression` against the files gltfpack 1.3 writes
+//! (`npm install gltfpack@1.3.0`), each beside the same pack uncompressed
+//! (`assets/blender_scene_instanced.glb`: `gltfpack -i
+//! assets/blender_scene.glb -o assets/blender_scene_instanced.glb -mi`):
+//!
+//! - `assets/blender_scene_meshopt.glb`: `... -mi -c -ce ext` (attributes
+//!   and triangles, no filter): the codecs are lossless, so every mesh
+//!   must come out bit for bit as the uncompressed pack's, but for where
+//!   each triangle starts (the triangle codec may rotate a triangle's
+//!   corners, its winding kept);
+//! - `assets/blender_scene_meshopt_filters.glb`: `... -mi -cc -ce ext`
+//!   (normals by the octahedral filter, instance rotations by the
+//!   quaternion one, translations and scales by the exponential one): the
+//!   filters re-quantize, so each mesh must match to their precision.
+
+use adaptive_pm::scene::{Mesh, Scene};
+use std::path::Path;
+
+fn asset(name: &str) -> Scene {
+    let s = Scene::load(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets")
+            .join(name),
+    )
+    .unwrap();
+    assert!(s.warnings().is_empty(), "{name}: {:?}", s.warnings());
+    s
+}
+
+/// The meshes of `s`, in a fixed order (the loader's order follows the
+/// file's nodes, which the two packs write alike, but sort to be sure).
+/// Each triangle's corners rotated to start at its smallest index (the
+/// same triangle, the same winding).
+fn rotated(indices: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    indices
+        .iter()
+        .map(|&[a, b, c]| match (a.min(b).min(c), a, b) {
+            (m, x, _) if m == x => [a, b, c],
+            (m, _, y) if m == y => [b, c, a],
+            _ => [c, a, b],
+        })
+        .collect()
+}
+
+fn meshes(s: &Scene) -> Vec<&Mesh> {
+    let mut v: Vec<&Mesh> = s.meshes().iter().collect();
+    let key = |m: &Mesh| (m.name.clone(), m.positions.first().map(|p| p.to_array()));
+    v.sort_by(|a, b| {
+        let (ka, kb) = (key(a), key(b));
+        ka.0.cmp(&kb.0).then(
+            ka.1.unwrap_or_default()
+                .partial_cmp(&kb.1.unwrap_or_default())
+                .unwrap(),
+        )
+    });
+    v
+}
+
+#[test]
+fn compressed_buffer_views_decode_to_the_uncompressed_pack_bit_for_bit() {
+    let (plain, packed) = (
+        asset("blender_scene_instanced.glb"),
+        asset("blender_scene_meshopt.glb"),
+    );
+    let (a, b) = (meshes(&plain), meshes(&packed));
+    assert_eq!(a.len(), b.len());
+    assert!(a.len() >= 5, "the scene's meshes, its pillars instanced");
+    for (ma, mb) in a.iter().zip(&b) {
+        assert_eq!(ma.name, mb.name);
+        assert_eq!(rotated(&ma.indices), rotated(&mb.indices), "{}", ma.name);
+        let bits = |v: &[glam::Vec3]| {
+            v.iter()
+                .map(|p| p.to_array().map(f32::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(bits(&ma.positions), bits(&mb.positions), "{}", ma.name);
+        assert_eq!(bits(&ma.normals), bits(&mb.normals), "{}", ma.name);
+        assert_eq!(ma.texcoords, mb.texcoords, "{}", ma.name);
+        assert_eq!(
+            plain.materials()[ma.material].name,
+            packed.materials()[mb.material].name
+        );
+    }
+    assert_eq!(plain.lights().len(), packed.lights().len());
+}
+
+/// A mesh's area, its area-weighted centroid, its bounding box and its
+/// area-weighted mean vertex normal: what a renderer sees of it, whatever
+/// order its vertices and triangles come in.
+fn moments(m: &Mesh) -> (f32, glam::Vec3, [glam::Vec3; 2], glam::Vec3) {
+    let (mut area, mut centre, mut normal) = (0.0, glam::Vec3::ZERO, glam::Vec3::ZERO);
+    for t in &m.indices {
+        let [a, b, c] = t.map(|i| m.positions[i as usize]);
+        let da = 0.5 * (b - a).cross(c - a).length();
+        area += da;
+        centre += da * (a + b + c) / 3.0;
+        if !m.normals.is_empty() {
+            normal += da * t.iter().map(|&i| m.normals[i as usize]).sum::<glam::Vec3>() / 3.0;
+        }
+    }
+    let lo = m
+        .positions
+        .iter()
+        .fold(glam::Vec3::INFINITY, |a, p| a.min(*p));
+    let hi = m
+        .positions
+        .iter()
+        .fold(glam::Vec3::NEG_INFINITY, |a, p| a.max(*p));
+    (area, centre / area, [lo, hi], normal / area)
+}
+
+#[test]
+fn filtered_views_match_the_uncompressed_pack_to_their_precision() {
+    let (plain, packed) = (
+        asset("blender_scene_instanced.glb"),
+        asset("blender_scene_meshopt_filters.glb"),
+    );
+    let (a, b) = (meshes(&plain), meshes(&packed));
+    assert_eq!(a.len(), b.len());
+    // `-cc` orders vertices and triangles its own way: compare what does
+    // not depend on the order. The instance transforms pass through the
+    // quaternion (16-bit) and exponential filters, the normals through the
+    // octahedral one at 8 bits.
+    for (ma, mb) in a.iter().zip(&b) {
+        assert_eq!(ma.indices.len(), mb.indices.len(), "{}", ma.name);
+        let ((aa, ca, ba, na), (ab, cb, bb, nb)) = (moments(ma), moments(mb));
+        assert!(
+            (aa - ab).abs() < 1e-4 * aa.max(1.0),
+            "{}: area {aa} vs {ab}",
+            ma.name
+        );
+        assert!(
+            (ca - cb).length() < 1e-3,
+            "{}: centroid {ca} vs {cb}",
+            ma.name
+        );
+        for (p, q) in ba.iter().zip(&bb) {
+            assert!((*p - *q).length() < 1e-3, "{}: box {p} vs {q}", ma.name);
+        }
+        assert!(
+            (na - nb).length() < 1e-2,
+            "{}: mean normal {na} vs {nb}",
+            ma.name
+        );
+    }
+}
+
+/// `tests/gltf/meshopt_cornell.gltf`: `gltfpack -i assets/cornell_box.gltf
+/// -o meshopt_cornell.gltf -cc -ce ext -kn -km`, its `.bin` then embedded
+/// as a data URI. Its fallback buffer has no data of its own (zeros the
+/// views are decoded into) in a text file, not a GLB; the box keeps its
+/// area, light and materials to gltfpack's quantization.
+#[test]
+fn a_text_file_with_a_fallback_buffer_loads_the_box() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let box_ = Scene::load(root.join("assets/cornell_box.gltf")).unwrap();
+    let packed = Scene::load(root.join("tests/gltf/meshopt_cornell.gltf")).unwrap();
+    assert_eq!(packed.triangle_count(), box_.triangle_count());
+    let area = |s: &Scene| s.meshes().iter().map(|m| f64::from(m.area())).sum::<f64>();
+    let (a, b) = (area(&box_), area(&packed));
+    assert!((a - b).abs() < 1e-3 * a, "area {a} vs {b}");
+    let power = |s: &Scene| s.lights().iter().map(|l| l.power()).sum::<glam::Vec3>();
+    let (pa, pb) = (power(&box_), power(&packed));
+    assert!((pa - pb).abs().max_element() < 2e-3 * pa.max_element(), "{pa} vs {pb}");
+}
