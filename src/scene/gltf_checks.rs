@@ -71,9 +71,10 @@ pub(super) fn multiplicity(t: Type) -> u64 {
 /// The extensions a file may require: the eight the loader reads, and two
 /// texture formats, whose textures (with no PNG or JPEG `source`) cannot be
 /// part of a valid file the loader accepts anyway.
-const SUPPORTED_REQUIRED: [&str; 11] = [
+const SUPPORTED_REQUIRED: [&str; 12] = [
     "KHR_lights_punctual",
     super::gltf_meshopt::EXT_MESHOPT_COMPRESSION,
+    super::gltf_meshopt::KHR_MESHOPT_COMPRESSION,
     super::gltf_instancing::EXT_MESH_GPU_INSTANCING,
     super::gltf_quantized::KHR_MESH_QUANTIZATION,
     "KHR_materials_emissive_strength",

@@ -1,9 +1,14 @@
-//! `EXT_meshopt_compression`: buffer views stored compressed (what
-//! `gltfpack -c` writes), decoded into their place in the parent buffer
-//! before any accessor reads them, so the rest of the loader sees plain
-//! data. The three bitstreams (attributes, triangles, indices) and the
-//! four filters are the extension's appendices; every read is
-//! bounds-checked and a malformed stream is an error naming its view.
+//! `EXT_meshopt_compression` and `KHR_meshopt_compression`: buffer views
+//! stored compressed (what `gltfpack -c` writes, `-ce khr` for the second),
+//! decoded into their place in the parent buffer before any accessor reads
+//! them, so the rest of the loader sees plain data. The bitstreams
+//! (attributes in versions 0 and 1, triangles, indices) and the filters
+//! (octahedral, quaternion, exponential, and the KHR extension's colour)
+//! are the extensions' appendices; every read is bounds-checked and a
+//! malformed stream is an error naming its view. The KHR extension's
+//! version 0 is the EXT one's bitstream; its version 1 adds control modes
+//! (bit widths per byte position) and channel modes (16-bit and rotated
+//! XOR deltas).
 //!
 //! The uncompressed bytes go to the view's own buffer, which a compressing
 //! writer leaves without data (`"fallback": true`, or no URI after the GLB
@@ -14,26 +19,30 @@ use crate::error::{Error, Result};
 use gltf::json::Root;
 use serde_json::{Map, Value};
 
-/// The extension's name.
+/// The vendor extension's name.
 pub(super) const EXT_MESHOPT_COMPRESSION: &str = "EXT_meshopt_compression";
+/// The Khronos extension's name.
+pub(super) const KHR_MESHOPT_COMPRESSION: &str = "KHR_meshopt_compression";
+const NAMES: [&str; 2] = [EXT_MESHOPT_COMPRESSION, KHR_MESHOPT_COMPRESSION];
 
-/// Whether buffer `i` is a fallback the extension fills: marked so, or
-/// without data of its own in a file that uses the extension.
+/// Whether buffer `i` is a fallback an extension fills: marked so, or
+/// without data of its own in a file that uses one.
 pub(super) fn is_fallback(root: &Root, i: usize) -> bool {
     let Some(b) = root.buffers.get(i) else {
         return false;
     };
-    let marked = b
-        .extensions
-        .as_ref()
-        .and_then(|e| e.others.get(EXT_MESHOPT_COMPRESSION))
-        .and_then(|e| e.get("fallback"))
-        .and_then(Value::as_bool)
-        .unwrap_or(false);
+    let marked = NAMES.iter().any(|name| {
+        b.extensions
+            .as_ref()
+            .and_then(|e| e.others.get(*name))
+            .and_then(|e| e.get("fallback"))
+            .and_then(Value::as_bool)
+            .unwrap_or(false)
+    });
     let used = root
         .extensions_used
         .iter()
-        .any(|e| e == EXT_MESHOPT_COMPRESSION);
+        .any(|e| NAMES.contains(&e.as_str()));
     marked || (used && b.uri.is_none())
 }
 
@@ -51,6 +60,8 @@ enum Filter {
     Octahedral,
     Quaternion,
     Exponential,
+    /// YCoCg colours (the KHR extension only).
+    Color,
 }
 
 /// A view's extension object.
@@ -63,22 +74,19 @@ struct Compressed {
     count: usize,
     mode: Mode,
     filter: Filter,
+    /// The KHR extension: attributes may be in version 1, and colours filtered.
+    khr: bool,
 }
 
 /// Decodes every compressed view of `root` into `buffers`.
 pub(super) fn decode_views(root: &Root, buffers: &mut [Vec<u8>]) -> Result<()> {
     for (i, view) in root.buffer_views.iter().enumerate() {
-        let Some(ext) = view
-            .extensions
-            .as_ref()
-            .and_then(|e| e.others.get(EXT_MESHOPT_COMPRESSION))
-        else {
+        let others = view.extensions.as_ref().map(|e| &e.others);
+        let Some((name, ext)) = NAMES.iter().find_map(|&n| Some((n, others?.get(n)?))) else {
             continue;
         };
-        let what = |why: String| {
-            Error::InvalidScene(format!("bufferView {i} ({EXT_MESHOPT_COMPRESSION}): {why}"))
-        };
-        let c = parse(ext).map_err(what)?;
+        let what = |why: String| Error::InvalidScene(format!("bufferView {i} ({name}): {why}"));
+        let c = parse(ext, name == KHR_MESHOPT_COMPRESSION).map_err(what)?;
         let length = view.byte_length.0 as usize;
         if c.stride.checked_mul(c.count) != Some(length) {
             return Err(what(format!(
@@ -104,7 +112,7 @@ pub(super) fn decode_views(root: &Root, buffers: &mut [Vec<u8>]) -> Result<()> {
     Ok(())
 }
 
-fn parse(ext: &Value) -> std::result::Result<Compressed, String> {
+fn parse(ext: &Value, khr: bool) -> std::result::Result<Compressed, String> {
     let obj: &Map<String, Value> = ext.as_object().ok_or("not an object")?;
     let int = |key: &str, default: Option<u64>| -> std::result::Result<usize, String> {
         match obj.get(key) {
@@ -132,6 +140,7 @@ fn parse(ext: &Value) -> std::result::Result<Compressed, String> {
         "OCTAHEDRAL" => Filter::Octahedral,
         "QUATERNION" => Filter::Quaternion,
         "EXPONENTIAL" => Filter::Exponential,
+        "COLOR" if khr => Filter::Color,
         f => return Err(format!("unknown filter `{f}`")),
     };
     let c = Compressed {
@@ -142,6 +151,7 @@ fn parse(ext: &Value) -> std::result::Result<Compressed, String> {
         count: int("count", None)?,
         mode,
         filter,
+        khr,
     };
     let s = c.stride;
     let valid = match (c.mode, c.filter) {
@@ -151,7 +161,7 @@ fn parse(ext: &Value) -> std::result::Result<Compressed, String> {
                 && s <= 256
                 && match f {
                     Filter::None | Filter::Exponential => true,
-                    Filter::Octahedral => s == 4 || s == 8,
+                    Filter::Octahedral | Filter::Color => s == 4 || s == 8,
                     Filter::Quaternion => s == 8,
                 }
         }
@@ -171,12 +181,12 @@ fn parse(ext: &Value) -> std::result::Result<Compressed, String> {
 fn decode(c: &Compressed, src: &[u8]) -> std::result::Result<Vec<u8>, String> {
     match c.mode {
         Mode::Attributes => {
-            let mut out = decode_attributes(src, c.count, c.stride)?;
+            let mut out = decode_attributes(src, c.count, c.stride, c.khr)?;
             apply_filter(c.filter, c.stride, &mut out);
             Ok(out)
         }
-        Mode::Triangles => write_indices(&decode_triangles(src, c.count)?, c.stride),
-        Mode::Indices => write_indices(&decode_indices(src, c.count)?, c.stride),
+        Mode::Triangles => Ok(write_indices(&decode_triangles(src, c.count)?, c.stride)),
+        Mode::Indices => Ok(write_indices(&decode_indices(src, c.count)?, c.stride)),
     }
 }
 
@@ -236,68 +246,146 @@ fn unzigzag32(v: u32) -> i32 {
     }
 }
 
-/// Mode 0: per-byte deltas from the previous element, in blocks of at most
-/// 256 elements, groups of 16; the baseline element is the stream's tail.
+fn unzigzag16(v: u16) -> u16 {
+    if v & 1 != 0 {
+        !(v >> 1)
+    } else {
+        v >> 1
+    }
+}
+
+/// Bit widths of a group's deltas by its 2 header bits: version 0, then
+/// version 1 by the byte position's control mode 0 and 1.
+const WIDTHS: [[u8; 4]; 3] = [[0, 2, 4, 8], [0, 1, 2, 4], [1, 2, 4, 8]];
+
+/// Mode 0: deltas from the previous element, in blocks of at most 256
+/// elements, groups of 16, stored byte position by byte position; the
+/// baseline element is in the stream's tail (with, in version 1, a mode
+/// per 4-byte channel: byte, 16-bit or rotated XOR deltas).
 fn decode_attributes(
     src: &[u8],
     count: usize,
     stride: usize,
+    v1_allowed: bool,
 ) -> std::result::Result<Vec<u8>, String> {
-    const TAIL_MIN: usize = 32;
-    match src.first() {
-        Some(0xa0) => {}
-        Some(h) => return Err(format!("attribute header {h:#04x}, not 0xa0")),
+    let v1 = match src.first() {
+        Some(0xa0) => false,
+        Some(0xa1) if v1_allowed => true,
+        Some(h) => {
+            return Err(format!(
+                "attribute header {h:#04x}, not a version this extension has"
+            ))
+        }
         None => return Err("an empty stream".into()),
-    }
-    let tail = stride.max(TAIL_MIN);
+    };
+    let channels = stride / 4;
+    let modes_len = if v1 { channels } else { 0 };
+    let tail = (stride + modes_len).max(if v1 { 24 } else { 32 });
     if src.len() < 1 + tail {
         return Err("the stream is shorter than its tail".into());
     }
-    let mut last = src[src.len() - stride..].to_vec();
+    let modes = &src[src.len() - modes_len..];
+    let base_end = src.len() - modes_len;
+    let mut last = src[base_end - stride..base_end].to_vec();
+    for &m in modes {
+        if m & 15 > 2 || (m & 15 < 2 && m >> 4 != 0) {
+            return Err(format!("channel mode {m:#04x}"));
+        }
+    }
     let mut data = Bytes {
         data: &src[1..src.len() - tail],
         at: 0,
     };
     let mut out = vec![0u8; count * stride];
     let max_block = ((8192 / stride) & !15).min(256);
-    let mut deltas = [0u8; 256];
+    let mut deltas = vec![0u8; stride * 256];
     let mut first = 0;
     while first < count {
         let block = (count - first).min(max_block);
         let groups = block.div_ceil(16);
-        for k in 0..stride {
-            let header = data.take(groups.div_ceil(4))?;
-            for g in 0..groups {
-                let bits = (header[g / 4] >> ((g % 4) * 2)) & 3;
-                decode_group(bits, &mut data, &mut deltas[g * 16..g * 16 + 16])?;
-            }
-            for (i, &d) in deltas[..block].iter().enumerate() {
-                let v = last[k].wrapping_add(unzigzag8(d));
-                out[(first + i) * stride + k] = v;
-                last[k] = v;
+        let control = data.take(if v1 { channels } else { 0 })?;
+        for (k, d) in deltas.chunks_exact_mut(256).enumerate() {
+            let d = &mut d[..groups * 16];
+            let ctrl = control.get(k / 4).map_or(0, |c| (c >> ((k % 4) * 2)) & 3);
+            match (v1, ctrl) {
+                (true, 2) => d.fill(0),
+                // Literal: the block's deltas, not rounded up to a group.
+                (true, 3) => d[..block].copy_from_slice(data.take(block)?),
+                _ => {
+                    let widths = WIDTHS[if v1 { 1 + usize::from(ctrl) } else { 0 }];
+                    let header = data.take(groups.div_ceil(4))?;
+                    for (g, group) in d.chunks_exact_mut(16).enumerate() {
+                        let bits = (header[g / 4] >> ((g % 4) * 2)) & 3;
+                        decode_group(widths[usize::from(bits)], &mut data, group)?;
+                    }
+                }
             }
         }
+        let rows = first * stride..(first + block) * stride;
+        apply_deltas(&deltas, modes, &mut last, &mut out[rows], block);
         first += block;
     }
     data.finished()?;
     Ok(out)
 }
 
-/// One group of 16 zigzagged deltas: zeros, 2- or 4-bit codes with a
-/// sentinel for a full byte, or 16 bytes.
-fn decode_group(bits: u8, data: &mut Bytes, out: &mut [u8]) -> std::result::Result<(), String> {
-    match bits {
+/// Adds a block's deltas (`deltas[k * 256 + i]`: byte `k` of element `i`)
+/// to `last` element by element into `out`, channel by channel.
+fn apply_deltas(deltas: &[u8], modes: &[u8], last: &mut [u8], out: &mut [u8], block: usize) {
+    let stride = last.len();
+    let d = |k: usize, i: usize| deltas[k * 256 + i];
+    for c in 0..stride.div_ceil(4) {
+        let mode = modes.get(c).copied().unwrap_or(0);
+        let bytes = 4 * c..(4 * c + 4).min(stride);
+        for i in 0..block {
+            let row = &mut out[i * stride..(i + 1) * stride];
+            match mode & 15 {
+                1 => {
+                    for k in bytes.clone().step_by(2) {
+                        let delta = unzigzag16(u16::from_le_bytes([d(k, i), d(k + 1, i)]));
+                        let v = u16::from_le_bytes([last[k], last[k + 1]]).wrapping_add(delta);
+                        last[k..k + 2].copy_from_slice(&v.to_le_bytes());
+                    }
+                }
+                2 => {
+                    let delta = u32::from_le_bytes([0, 1, 2, 3].map(|j| d(4 * c + j, i)));
+                    let prev = u32::from_le_bytes([0, 1, 2, 3].map(|j| last[4 * c + j]));
+                    // The encoder rotated left by the mode's high bits.
+                    let v = prev ^ delta.rotate_right(u32::from(mode >> 4));
+                    last[bytes.clone()].copy_from_slice(&v.to_le_bytes());
+                }
+                _ => {
+                    for k in bytes.clone() {
+                        last[k] = last[k].wrapping_add(unzigzag8(d(k, i)));
+                    }
+                }
+            }
+            row[bytes.clone()].copy_from_slice(&last[bytes.clone()]);
+        }
+    }
+}
+
+/// One group of 16 zigzagged deltas of `width` bits: zeros, 1-, 2- or
+/// 4-bit codes with a sentinel (all ones) for a full byte after them, or 16
+/// bytes.
+fn decode_group(width: u8, data: &mut Bytes, out: &mut [u8]) -> std::result::Result<(), String> {
+    match width {
         0 => out.fill(0),
-        3 => out.copy_from_slice(data.take(16)?),
+        8 => out.copy_from_slice(data.take(16)?),
         _ => {
-            let width = if bits == 1 { 2 } else { 4 };
-            let per_byte = 8 / width;
+            let per_byte = usize::from(8 / width);
             let sentinel = (1u8 << width) - 1;
             let packed = data.take(16 / per_byte)?;
             let mut codes = [0u8; 16];
             for (i, c) in codes.iter_mut().enumerate() {
-                // The first element sits in the byte's most significant bits.
-                let shift = 8 - width * (1 + i % per_byte);
+                let slot = (i % per_byte) as u8;
+                // 1-bit codes fill a byte from its least significant bit,
+                // 2- and 4-bit codes from its most significant bits.
+                let shift = if width == 1 {
+                    slot
+                } else {
+                    8 - width * (1 + slot)
+                };
                 *c = (packed[i / per_byte] >> shift) & sentinel;
             }
             for (o, c) in out.iter_mut().zip(codes) {
@@ -336,14 +424,14 @@ fn decode_triangles(src: &[u8], count: usize) -> std::result::Result<Vec<u32>, S
     for &code in codes {
         let (hi, lo) = (code >> 4, code & 15);
         let tri = if hi < 15 {
-            let (a, b) = fifo.edge(hi);
+            let (a, b) = fifo.edge(hi)?;
             let c = match lo {
                 0 => {
                     next += 1;
                     fifo.push_vertex(next - 1);
                     next - 1
                 }
-                1..=12 => fifo.vertex(lo),
+                1..=12 => fifo.vertex(lo)?,
                 13 | 14 => {
                     last = if lo == 13 {
                         last.wrapping_sub(1)
@@ -386,7 +474,7 @@ fn decode_triangles(src: &[u8], count: usize) -> std::result::Result<Vec<u32>, S
                         (next - 1, true)
                     }
                     15 if explicit => (index(data, &mut last)?, true),
-                    _ => (fifo.vertex(x - 1), false),
+                    _ => (fifo.vertex(x - 1)?, false),
                 })
             };
             let (b, push_b) = other(z, &mut data)?;
@@ -409,32 +497,42 @@ fn decode_triangles(src: &[u8], count: usize) -> std::result::Result<Vec<u32>, S
     Ok(out)
 }
 
-/// The triangle codec's recent edges and vertices (index 0: the newest).
+/// The triangle codec's recent edges and vertices (index 0: the newest),
+/// with how many of each were pushed: a stream that reads an entry never
+/// written is malformed.
 #[derive(Default)]
 struct Fifos {
     edges: [(u32, u32); 16],
-    edge_at: usize,
+    edges_pushed: usize,
     vertices: [u32; 16],
-    vertex_at: usize,
+    vertices_pushed: usize,
 }
 
 impl Fifos {
-    fn edge(&self, i: u8) -> (u32, u32) {
-        self.edges[(self.edge_at + 15 - usize::from(i)) & 15]
+    fn edge(&self, i: u8) -> std::result::Result<(u32, u32), String> {
+        let i = usize::from(i);
+        match i < self.edges_pushed {
+            true => Ok(self.edges[(self.edges_pushed + 15 - i) & 15]),
+            false => Err(format!("edge {i} read before it was written")),
+        }
     }
 
-    fn vertex(&self, i: u8) -> u32 {
-        self.vertices[(self.vertex_at + 15 - usize::from(i)) & 15]
+    fn vertex(&self, i: u8) -> std::result::Result<u32, String> {
+        let i = usize::from(i);
+        match i < self.vertices_pushed {
+            true => Ok(self.vertices[(self.vertices_pushed + 15 - i) & 15]),
+            false => Err(format!("vertex {i} read before it was written")),
+        }
     }
 
     fn push_edge(&mut self, a: u32, b: u32) {
-        self.edges[self.edge_at] = (a, b);
-        self.edge_at = (self.edge_at + 1) & 15;
+        self.edges[self.edges_pushed & 15] = (a, b);
+        self.edges_pushed += 1;
     }
 
     fn push_vertex(&mut self, v: u32) {
-        self.vertices[self.vertex_at] = v;
-        self.vertex_at = (self.vertex_at + 1) & 15;
+        self.vertices[self.vertices_pushed & 15] = v;
+        self.vertices_pushed += 1;
     }
 }
 
@@ -465,17 +563,17 @@ fn decode_indices(src: &[u8], count: usize) -> std::result::Result<Vec<u32>, Str
     Ok(out)
 }
 
-fn write_indices(indices: &[u32], stride: usize) -> std::result::Result<Vec<u8>, String> {
+fn write_indices(indices: &[u32], stride: usize) -> Vec<u8> {
     let mut out = Vec::with_capacity(indices.len() * stride);
     for &i in indices {
         if stride == 2 {
-            let i = u16::try_from(i).map_err(|_| format!("index {i} does not fit 16 bits"))?;
-            out.extend_from_slice(&i.to_le_bytes());
+            // 16 bits with wraparound, as the extensions say.
+            out.extend_from_slice(&(i as u16).to_le_bytes());
         } else {
             out.extend_from_slice(&i.to_le_bytes());
         }
     }
-    Ok(out)
+    out
 }
 
 fn apply_filter(filter: Filter, stride: usize, data: &mut [u8]) {
@@ -515,7 +613,44 @@ fn apply_filter(filter: Filter, stride: usize, data: &mut [u8]) {
             let x = (f64::from(mantissa) * 2f64.powi(exp)) as f32;
             e.copy_from_slice(&x.to_le_bytes());
         }),
+        Filter::Color if stride == 4 => data.chunks_exact_mut(4).for_each(|e| {
+            let [y, co, cg, a] = [
+                e[0] as i32,
+                e[1] as i8 as i32,
+                e[2] as i8 as i32,
+                e[3] as i32,
+            ];
+            e.copy_from_slice(&ycocg(y, co, cg, a, 255.0).map(|v| v as u8));
+        }),
+        Filter::Color => data.chunks_exact_mut(8).for_each(|e| {
+            let c = |k: usize| u16::from_le_bytes([e[2 * k], e[2 * k + 1]]);
+            let [y, co, cg, a] = [
+                c(0) as i32,
+                c(1) as i16 as i32,
+                c(2) as i16 as i32,
+                c(3) as i32,
+            ];
+            let rgba = ycocg(y, co, cg, a, 65535.0).map(|v| v as u16);
+            for (k, v) in rgba.into_iter().enumerate() {
+                e[2 * k..2 * k + 2].copy_from_slice(&v.to_le_bytes());
+            }
+        }),
     }
+}
+
+/// The colour filter's RGBA in units of `max` (an `f32` whose cast to the
+/// component type saturates) from Y, Co, Cg and the alpha that carries the
+/// bit count in its highest set bit.
+fn ycocg(y: i32, co: i32, cg: i32, a: i32, max: f32) -> [f32; 4] {
+    if a <= 0 {
+        return [0.0; 4];
+    }
+    let scale = (1i32 << (32 - a.leading_zeros())) - 1;
+    let (r, g, b) = (y + co - cg, y + cg, y - co - cg);
+    let a = a & (scale >> 1);
+    let a = (a << 1) | (a & 1);
+    let ss = max / scale as f32;
+    [r, g, b, a].map(|v| (v as f32 * ss).round())
 }
 
 /// The octahedral filter's unit vector, in units of `max`.
@@ -545,13 +680,64 @@ mod tests {
             at: 0,
         };
         let mut out = [0u8; 16];
-        decode_group(2, &mut data, &mut out).unwrap();
+        decode_group(4, &mut data, &mut out).unwrap();
         let deltas = out.map(|d| unzigzag8(d) as i8);
         assert_eq!(
             deltas,
             [-1, -4, -3, 26, -91, 0, -6, 6, -4, -4, 5, -5, 1, -1, 0, 0]
         );
         assert!(data.finished().is_ok());
+    }
+
+    /// A version-1 stream written by hand: 20 elements of 8 bytes, one
+    /// block; bytes 0-3 literal under a rotated-XOR channel, bytes 4-5 in
+    /// 1-bit groups and bytes 6-7 zero under a 16-bit channel.
+    #[test]
+    fn version_one_control_and_channel_modes_decode() {
+        let (count, stride) = (20usize, 8usize);
+        let base: [u8; 8] = [1, 2, 3, 4, 10, 0, 0, 0];
+        let xor: Vec<u32> = (0..count as u32)
+            .map(|i| i.wrapping_mul(0x9E37_79B9))
+            .collect();
+        let mut src = vec![0xa1];
+        // Control: bytes 0-3 literal (3), byte 4 and 5 mode 0, 6 and 7 zero (2).
+        src.extend_from_slice(&[0xff, 0b1010_0000]);
+        for k in 0..4 {
+            src.extend(xor.iter().map(|x| x.to_le_bytes()[k]));
+        }
+        // Byte 4: deltas zigzag(1) = 2 in every element, a 1-bit group
+        // can't hold 2: sentinel (1) then the byte, for both groups
+        // (header bits 1: width 1 under control 0).
+        src.push(0b0101);
+        for _ in 0..2 {
+            src.extend_from_slice(&[0xff, 0xff]);
+            src.extend_from_slice(&[2; 16]);
+        }
+        // Byte 5: all zero deltas (header bits 0).
+        src.push(0);
+        // Tail: padding, the baseline, then the channel modes (XOR rotated
+        // by 3, 16-bit deltas).
+        let modes = [0x32, 0x01];
+        let tail = stride + modes.len();
+        src.extend(std::iter::repeat_n(0, 24 - tail));
+        src.extend_from_slice(&base);
+        src.extend_from_slice(&modes);
+        let out = decode_attributes(&src, count, stride, true).unwrap();
+        assert!(
+            decode_attributes(&src, count, stride, false).is_err(),
+            "EXT has no version 1"
+        );
+        let mut prev = u32::from_le_bytes([1, 2, 3, 4]);
+        let mut low = u16::from_le_bytes([10, 0]);
+        for (i, e) in out.chunks_exact(stride).enumerate() {
+            // The reference decoder: rotate(v, (32 - r) & 31) ^ previous.
+            prev ^= xor[i].rotate_left((32 - 3) & 31);
+            assert_eq!(e[..4], prev.to_le_bytes(), "element {i}");
+            // 16-bit channel: low byte delta zigzag 2 = +1, high byte 0.
+            low = low.wrapping_add(1);
+            assert_eq!(e[4..6], low.to_le_bytes(), "element {i}");
+            assert_eq!(e[6..], [0, 0], "element {i}");
+        }
     }
 
     #[test]
@@ -580,13 +766,15 @@ mod tests {
     fn malformed_streams_are_errors_not_panics() {
         for len in 0..80 {
             let junk: Vec<u8> = (0..len).map(|i| (i * 37 + 11) as u8).collect();
-            for head in [0xa0, 0xe1, 0xd1, 0x00] {
+            for head in [0xa0, 0xa1, 0xe1, 0xd1, 0x00] {
                 let mut s = junk.clone();
                 if let Some(b) = s.first_mut() {
                     *b = head;
                 }
-                let _ = decode_attributes(&s, 40, 12);
-                let _ = decode_attributes(&s, 3, 256);
+                for v1 in [false, true] {
+                    let _ = decode_attributes(&s, 40, 12, v1);
+                    let _ = decode_attributes(&s, 3, 256, v1);
+                }
                 let _ = decode_triangles(&s, 30);
                 let _ = decode_indices(&s, 17);
             }

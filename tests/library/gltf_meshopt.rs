@@ -156,10 +156,72 @@ fn a_text_file_with_a_fallback_buffer_loads_the_box() {
     let box_ = Scene::load(root.join("assets/cornell_box.gltf")).unwrap();
     let packed = Scene::load(root.join("tests/gltf/meshopt_cornell.gltf")).unwrap();
     assert_eq!(packed.triangle_count(), box_.triangle_count());
-    let area = |s: &Scene| s.meshes().iter().map(|m| f64::from(m.area())).sum::<f64>();
+    let area = |s: &Scene| s.meshes().iter().map(|m| m.area()).sum::<f64>();
     let (a, b) = (area(&box_), area(&packed));
     assert!((a - b).abs() < 1e-3 * a, "area {a} vs {b}");
     let power = |s: &Scene| s.lights().iter().map(|l| l.power()).sum::<glam::Vec3>();
     let (pa, pb) = (power(&box_), power(&packed));
-    assert!((pa - pb).abs().max_element() < 2e-3 * pa.max_element(), "{pa} vs {pb}");
+    assert!(
+        (pa - pb).abs().max_element() < 2e-3 * pa.max_element(),
+        "{pa} vs {pb}"
+    );
+}
+
+/// `assets/blender_scene_meshopt_khr.glb`: `gltfpack -i
+/// assets/blender_scene.glb -o assets/blender_scene_meshopt_khr.glb -mi -cz
+/// -ce khr`, the Khronos extension with its version-1 attribute bitstream
+/// (control modes, 16-bit channel deltas) at gltfpack's highest level: it
+/// decodes to exactly what the vendor extension's pack with the same
+/// filters does.
+#[test]
+fn the_khronos_extensions_version_one_decodes_as_the_vendor_ones_pack() {
+    let (ext, khr) = (
+        asset("blender_scene_meshopt_filters.glb"),
+        asset("blender_scene_meshopt_khr.glb"),
+    );
+    let (a, b) = (meshes(&ext), meshes(&khr));
+    assert_eq!(a.len(), b.len());
+    let bits = |v: &[glam::Vec3]| {
+        v.iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    for (ma, mb) in a.iter().zip(&b) {
+        assert_eq!(rotated(&ma.indices), rotated(&mb.indices), "{}", ma.name);
+        assert_eq!(bits(&ma.positions), bits(&mb.positions), "{}", ma.name);
+        assert_eq!(bits(&ma.normals), bits(&mb.normals), "{}", ma.name);
+        assert_eq!(ma.texcoords, mb.texcoords, "{}", ma.name);
+    }
+}
+
+/// `tests/gltf/meshopt_khr_colours.gltf`: gltfpack's `-cc -ce khr -kn -km`
+/// over a generated floor with vertex colours (its `.bin` embedded), whose
+/// colours go through the Khronos extension's YCoCg colour filter; beside
+/// it the same pack uncompressed (`..._plain.gltf`, gltfpack without
+/// `-cc`). The filter is lossy to its bits: each colour within 2/255.
+#[test]
+fn the_colour_filter_gives_the_packs_vertex_colours() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/gltf");
+    let packed = Scene::load(root.join("meshopt_khr_colours.gltf")).unwrap();
+    let plain = Scene::load(root.join("meshopt_khr_colours_plain.gltf")).unwrap();
+    let colours = |s: &Scene| {
+        s.meshes()
+            .iter()
+            .flat_map(|m| m.colors.clone())
+            .collect::<Vec<_>>()
+    };
+    let (a, b) = (colours(&plain), colours(&packed));
+    assert!(
+        !a.is_empty() && a.len() == b.len(),
+        "{} vs {}",
+        a.len(),
+        b.len()
+    );
+    for (x, y) in a.iter().zip(&b) {
+        assert!((*x - *y).abs().max_element() <= 2.0 / 255.0, "{x} vs {y}");
+    }
+    assert!(
+        a.iter().any(|c| (c.x - c.y).abs() > 0.05),
+        "colours that differ by channel"
+    );
 }
