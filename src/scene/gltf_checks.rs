@@ -68,9 +68,9 @@ pub(super) fn multiplicity(t: Type) -> u64 {
     }
 }
 
-/// The extensions a file may require: the eight the loader reads, and two
-/// texture formats, whose textures (with no PNG or JPEG `source`) cannot be
-/// part of a valid file the loader accepts anyway.
+/// The extensions a file may require: those the loader reads, and
+/// `KHR_texture_basisu`, whose textures (with no PNG, JPEG or WebP image)
+/// load with their factors alone and a warning.
 const SUPPORTED_REQUIRED: [&str; 12] = [
     "KHR_lights_punctual",
     super::gltf_meshopt::EXT_MESHOPT_COMPRESSION,

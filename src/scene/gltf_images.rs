@@ -1,5 +1,6 @@
-//! Decoding a glTF image (PNG or JPEG, told apart by their first bytes, as
-//! a file's declared `mimeType` may be wrong) into 8-bit RGBA texels.
+//! Decoding a glTF image (PNG or JPEG, or WebP for `EXT_texture_webp`,
+//! told apart by their first bytes, as a file's declared `mimeType` may be
+//! wrong) into 8-bit RGBA texels.
 //!
 //! Every image's size is read from its header and counted against one
 //! budget per scene, [`MAX_TEXELS`], before its pixels are decoded, so a
@@ -26,12 +27,39 @@ pub(super) fn decode(what: &str, bytes: &[u8], budget: &mut u64) -> Result<Decod
         decode_png(what, bytes, budget)
     } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
         decode_jpeg(what, bytes, budget)
+    } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
+        decode_webp(what, bytes, budget)
     } else {
         Err(bad(
             what,
-            "not a PNG or JPEG image (the formats glTF 2.0 defines)",
+            "not a PNG, JPEG or WebP image (glTF 2.0's formats, and EXT_texture_webp's)",
         ))
     }
+}
+
+/// A WebP image, lossless or lossy; an animation's first frame (glTF has
+/// no use for the others).
+fn decode_webp(what: &str, bytes: &[u8], budget: &mut u64) -> Result<Decoded> {
+    let invalid = |e: image_webp::DecodingError| bad(what, format!("invalid WebP: {e}"));
+    let mut decoder = image_webp::WebPDecoder::new(std::io::Cursor::new(bytes)).map_err(invalid)?;
+    let (w, h) = decoder.dimensions();
+    take(what, w, h, budget)?;
+    let size = decoder
+        .output_buffer_size()
+        .ok_or_else(|| bad(what, "a WebP image too large to hold"))?;
+    let mut buf = vec![0u8; size];
+    decoder.read_image(&mut buf).map_err(invalid)?;
+    let texels: Vec<[u8; 4]> = match decoder.has_alpha() {
+        true => buf
+            .chunks_exact(4)
+            .map(|p| [p[0], p[1], p[2], p[3]])
+            .collect(),
+        false => buf
+            .chunks_exact(3)
+            .map(|p| [p[0], p[1], p[2], 255])
+            .collect(),
+    };
+    Ok((w, h, texels))
 }
 
 /// Takes `w * h` texels from the budget, or says why not.
@@ -159,7 +187,7 @@ mod tests {
     fn bad_images_are_refused_by_name() {
         let mut budget = MAX_TEXELS;
         let e = decode("image 4", b"GIF89a....", &mut budget).unwrap_err();
-        assert!(e.to_string().contains("image 4") && e.to_string().contains("PNG or JPEG"));
+        assert!(e.to_string().contains("image 4") && e.to_string().contains("PNG, JPEG or WebP"));
         let mut cut = png_bytes(4, 4, png::ColorType::Rgba, &[0; 64]);
         cut.truncate(cut.len() - 20);
         assert!(decode("image 5", &cut, &mut budget).is_err());

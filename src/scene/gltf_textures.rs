@@ -142,7 +142,7 @@ impl<'a> TextureLoader<'a> {
                 let label = super::gltf_checks::label("texture", t.index(), t.name());
                 scene.warnings.push(format!(
                     "{label} has no `source` image: its image would come from an extension \
-                     (EXT_texture_webp, KHR_texture_basisu) whose images are not decoded, so \
+                     (KHR_texture_basisu) whose images are not decoded, so \
                      the materials that read it use their factors alone"
                 ));
             }
@@ -231,46 +231,69 @@ impl<'a> TextureLoader<'a> {
         }))
     }
 
-    /// Whether glTF texture `t` names an image. glTF lets a texture leave
-    /// its `source` out when an extension supplies the image; the gltf
-    /// crate then holds `u32::MAX` there, and its `source()` would panic.
+    /// The image glTF texture `t` reads: its `source`, or else the image
+    /// `EXT_texture_webp` names (a file that requires the extension may
+    /// leave `source` out; with both, `source` is the same picture in a
+    /// core format). The gltf crate holds `u32::MAX` for a missing
+    /// `source`, where its `source()` would panic.
+    fn image_of(&self, t: &gltf::Texture) -> Option<usize> {
+        let json = self.json.textures.get(t.index())?;
+        if json.source.value() != NO_SOURCE {
+            return Some(json.source.value());
+        }
+        let webp = json.extensions.as_ref()?.others.get(EXT_TEXTURE_WEBP)?;
+        let i = usize::try_from(webp.get("source")?.as_u64()?).ok()?;
+        (i < self.json.images.len()).then_some(i)
+    }
+
     fn has_source(&self, t: &gltf::Texture) -> bool {
-        self.json
-            .textures
-            .get(t.index())
-            .is_some_and(|j| j.source.value() != NO_SOURCE)
+        self.image_of(t).is_some()
     }
 
     /// Decodes the image of `t`, which has one ([`Self::has_source`]).
     fn load(&mut self, t: &gltf::Texture) -> Result<Texture> {
-        let image = t.source();
-        let what = super::gltf_checks::label("image", image.index(), image.name());
-        let bytes = self.image_bytes(&image, &what)?;
+        let i = self
+            .image_of(t)
+            .ok_or_else(|| Error::InvalidScene("a texture without an image".into()))?;
+        let image = &self.json.images[i];
+        let what = super::gltf_checks::label("image", i, image.name.as_deref());
+        let bytes = self.image_bytes(image, &what)?;
         let (w, h, texels) = decode(&what, &bytes, &mut self.budget)?;
         Texture::new(w, h, texels, sampler_of(&t.sampler()))
     }
 
-    fn image_bytes(&self, image: &gltf::Image, what: &str) -> Result<Vec<u8>> {
-        match image.source() {
-            gltf::image::Source::View { view, .. } => {
+    fn image_bytes(&self, image: &gltf::json::Image, what: &str) -> Result<Vec<u8>> {
+        let missing = |why: &str| Error::InvalidScene(format!("{what}: {why}"));
+        match (&image.buffer_view, &image.uri) {
+            (Some(v), _) => {
                 // Inside its buffer: checked by gltf_data::check_data.
-                let data = self.buffers.get(view.buffer().index()).ok_or_else(|| {
-                    Error::InvalidScene(format!("{what}: its bufferView's buffer is missing"))
-                })?;
-                let start = view.offset();
-                data.get(start..start + view.length())
+                let view = self
+                    .json
+                    .buffer_views
+                    .get(v.value())
+                    .ok_or_else(|| missing("its bufferView is missing"))?;
+                let data = self
+                    .buffers
+                    .get(view.buffer.value())
+                    .ok_or_else(|| missing("its bufferView's buffer is missing"))?;
+                let start = view.byte_offset.map_or(0, |o| o.0 as usize);
+                data.get(start..start.saturating_add(view.byte_length.0 as usize))
                     .map(<[u8]>::to_vec)
-                    .ok_or_else(|| Error::InvalidScene(format!("{what}: past its buffer's end")))
+                    .ok_or_else(|| missing("past its buffer's end"))
             }
-            gltf::image::Source::Uri { uri, .. } => super::assets::read_resource(
+            (None, Some(uri)) => super::assets::read_resource(
                 what,
                 uri,
                 super::buffers::MAX_BUFFER_BYTES,
                 self.assets,
             ),
+            (None, None) => Err(missing("neither a bufferView nor a uri")),
         }
     }
 }
+
+/// The extension whose image a texture may read instead of its `source`.
+const EXT_TEXTURE_WEBP: &str = "EXT_texture_webp";
 
 /// The gltf crate's index for a texture's missing `source`.
 const NO_SOURCE: usize = u32::MAX as usize;
@@ -431,6 +454,19 @@ pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
         let name = label("texture", i, t.name.as_deref());
         if t.source.value() != NO_SOURCE {
             check_index(&name, "image", t.source.value(), root.images.len())?;
+        }
+        let webp = t
+            .extensions
+            .as_ref()
+            .and_then(|e| e.others.get(EXT_TEXTURE_WEBP));
+        if let Some(source) = webp.and_then(|w| w.get("source")) {
+            let i = source.as_u64().and_then(|i| usize::try_from(i).ok());
+            let i = i.ok_or_else(|| {
+                Error::InvalidScene(format!(
+                    "{name}: {EXT_TEXTURE_WEBP} `source` is not an index"
+                ))
+            })?;
+            check_index(&name, "image", i, root.images.len())?;
         }
         if let Some(s) = t.sampler {
             check_index(&name, "sampler", s.value(), root.samplers.len())?;

@@ -130,6 +130,35 @@ impl Doc {
         self.textures.len() - 1
     }
 
+    /// Adds a texture whose image is the WebP `webp`, named by
+    /// `EXT_texture_webp` (which the document then requires), with the PNG
+    /// `fallback` as its `source` when given; returns its index.
+    pub(crate) fn webp_texture(
+        &mut self,
+        webp: &[u8],
+        sampler: Value,
+        fallback: Option<&[u8]>,
+    ) -> usize {
+        let v = self.view(webp);
+        self.images
+            .push(json!({"bufferView": v, "mimeType": "image/webp"}));
+        let webp_image = self.images.len() - 1;
+        self.samplers.push(sampler);
+        let mut texture = json!({"sampler": self.samplers.len() - 1,
+            "extensions": {"EXT_texture_webp": {"source": webp_image}}});
+        if let Some(png) = fallback {
+            let v = self.view(png);
+            self.images
+                .push(json!({"bufferView": v, "mimeType": "image/png"}));
+            texture["source"] = json!(self.images.len() - 1);
+        }
+        self.textures.push(texture);
+        if !self.extensions_used.contains(&"EXT_texture_webp") {
+            self.extensions_used.push("EXT_texture_webp");
+        }
+        self.textures.len() - 1
+    }
+
     pub(crate) fn material(&mut self, m: Value) -> usize {
         self.materials.push(m);
         self.materials.len() - 1
@@ -166,8 +195,13 @@ impl Doc {
         }
         // KHR_mesh_quantization changes what accessors may hold: a file that
         // uses it must require it (the Khronos validator: NON_REQUIRED_EXTENSION).
-        if self.extensions_used.contains(&"KHR_mesh_quantization") {
-            doc["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+        // So does one whose textures may have their image only in WebP.
+        let required: Vec<&str> = ["KHR_mesh_quantization", "EXT_texture_webp"]
+            .into_iter()
+            .filter(|e| self.extensions_used.contains(e))
+            .collect();
+        if !required.is_empty() {
+            doc["extensionsRequired"] = json!(required);
         }
         let path = dir.join("scene.gltf");
         std::fs::write(&path, doc.to_string()).unwrap();

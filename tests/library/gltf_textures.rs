@@ -461,3 +461,67 @@ fn textures_colour_the_opaque_part_of_a_partly_transmitting_surface() {
         "{e}"
     );
 }
+
+/// `four_colours` as a lossless WebP (VP8L), written by Pillow 12
+/// (`Image.save(..., 'WEBP', lossless=True)`).
+const FOUR_COLOURS_WEBP: [u8; 52] = [
+    82, 73, 70, 70, 44, 0, 0, 0, 87, 69, 66, 80, 86, 80, 56, 76, 31, 0, 0, 0, 47, 1, 64, 0, 0, 31,
+    32, 16, 72, 222, 31, 58, 141, 249, 23, 16, 20, 252, 31, 221, 252, 71, 100, 15, 224, 6, 12, 17,
+    253, 15, 1, 0,
+];
+
+/// An 8 x 8 image of sRGB grey 188 as a lossy WebP (VP8, quality 90, by
+/// Pillow 12), which decodes to 189 (libwebp's decoder, through Pillow).
+const GREY_188_LOSSY_WEBP: [u8; 44] = [
+    82, 73, 70, 70, 36, 0, 0, 0, 87, 69, 66, 80, 86, 80, 56, 32, 24, 0, 0, 0, 48, 1, 0, 157, 1, 42,
+    8, 0, 8, 0, 0, 192, 18, 37, 164, 0, 3, 112, 0, 254, 250, 204, 128, 0,
+];
+
+/// `EXT_texture_webp` with no `source`: the WebP image colours the floor
+/// as the PNG does (lossless: the same texels), and a lossy one within
+/// its rounding.
+#[test]
+fn a_webp_image_colours_the_floor() {
+    let mut doc = floor_scene(None, matte(1.0, Some(json!({"index": 0}))), false);
+    doc.webp_texture(
+        &FOUR_COLOURS_WEBP,
+        serde_json::from_str(NEAREST_CLAMP).unwrap(),
+        None,
+    );
+    let scene = load(&doc);
+    assert!(scene.warnings().is_empty(), "{:?}", scene.warnings());
+    assert!(close(albedo_at(&scene, -1.0, -1.0), Vec3::X), "red");
+    assert!(close(albedo_at(&scene, 1.0, -1.0), Vec3::Y), "green");
+    assert!(close(albedo_at(&scene, -1.0, 1.0), Vec3::Z), "blue");
+    assert!(close(albedo_at(&scene, 1.0, 1.0), Vec3::ONE), "white");
+
+    let mut doc = floor_scene(None, matte(1.0, Some(json!({"index": 0}))), false);
+    doc.webp_texture(
+        &GREY_188_LOSSY_WEBP,
+        serde_json::from_str(NEAREST_CLAMP).unwrap(),
+        None,
+    );
+    let a = albedo_at(&load(&doc), 0.3, -0.7);
+    // sRGB 188 and 189 are linear 0.5029 and 0.5089.
+    assert!((a - Vec3::splat(0.5059)).abs().max_element() < 0.01, "{a}");
+}
+
+/// With a PNG `source` beside the WebP, the PNG is read (the same picture
+/// in glTF's own format); a WebP that does not decode is refused by name.
+#[test]
+fn a_webp_texture_prefers_its_png_source_and_a_broken_webp_is_refused() {
+    let mut doc = floor_scene(None, matte(1.0, Some(json!({"index": 0}))), false);
+    let sampler = serde_json::from_str(NEAREST_CLAMP).unwrap();
+    doc.webp_texture(&GREY_188_LOSSY_WEBP, sampler, Some(&four_colours()));
+    assert!(
+        close(albedo_at(&load(&doc), -1.0, -1.0), Vec3::X),
+        "the PNG's red"
+    );
+
+    // Cut short: its chunks declare more bytes than there are.
+    let broken = &FOUR_COLOURS_WEBP[..40];
+    let mut doc = floor_scene(None, matte(1.0, Some(json!({"index": 0}))), false);
+    doc.webp_texture(broken, serde_json::from_str(NEAREST_CLAMP).unwrap(), None);
+    let e = load_err(&doc);
+    assert!(e.contains("image 0") && e.contains("WebP"), "{e}");
+}
