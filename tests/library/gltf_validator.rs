@@ -86,6 +86,10 @@ const GENERATED_VALID_BUT_REFUSED: &[(&str, &str)] = &[
         "refracting glass (a KHR_materials_volume thickness) with MASK holes: a refracting \
          mesh must be closed to have an inside",
     ),
+    (
+        "gltf_textures__a_webp_texture_prefers_its_png_source_and_a_broken_webp_is_refused-2",
+        "a WebP image cut short: the validator reads its header, not its bitstream",
+    ),
 ];
 
 /// Generated documents the validator calls invalid and the loader accepts.
