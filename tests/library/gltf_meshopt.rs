@@ -56,31 +56,37 @@ fn meshes(s: &Scene) -> Vec<&Mesh> {
     v
 }
 
-#[test]
-fn compressed_buffer_views_decode_to_the_uncompressed_pack_bit_for_bit() {
-    let (plain, packed) = (
-        asset("blender_scene_instanced.glb"),
-        asset("blender_scene_meshopt.glb"),
-    );
-    let (a, b) = (meshes(&plain), meshes(&packed));
-    assert_eq!(a.len(), b.len());
-    assert!(a.len() >= 5, "the scene's meshes, its pillars instanced");
-    for (ma, mb) in a.iter().zip(&b) {
-        assert_eq!(ma.name, mb.name);
-        assert_eq!(rotated(&ma.indices), rotated(&mb.indices), "{}", ma.name);
-        let bits = |v: &[glam::Vec3]| {
-            v.iter()
-                .map(|p| p.to_array().map(f32::to_bits))
-                .collect::<Vec<_>>()
-        };
-        assert_eq!(bits(&ma.positions), bits(&mb.positions), "{}", ma.name);
-        assert_eq!(bits(&ma.normals), bits(&mb.normals), "{}", ma.name);
-        assert_eq!(ma.texcoords, mb.texcoords, "{}", ma.name);
+/// Asserts that `a` and `b` hold the same meshes bit for bit (positions,
+/// normals, texture coordinates, materials), each triangle with its
+/// winding wherever it starts; returns how many meshes.
+fn assert_same_meshes(a: &Scene, b: &Scene) -> usize {
+    let (ma, mb) = (meshes(a), meshes(b));
+    assert_eq!(ma.len(), mb.len());
+    let bits = |v: &[glam::Vec3]| {
+        v.iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect::<Vec<_>>()
+    };
+    for (x, y) in ma.iter().zip(&mb) {
+        assert_eq!(x.name, y.name);
+        assert_eq!(rotated(&x.indices), rotated(&y.indices), "{}", x.name);
+        assert_eq!(bits(&x.positions), bits(&y.positions), "{}", x.name);
+        assert_eq!(bits(&x.normals), bits(&y.normals), "{}", x.name);
+        assert_eq!(x.texcoords, y.texcoords, "{}", x.name);
         assert_eq!(
-            plain.materials()[ma.material].name,
-            packed.materials()[mb.material].name
+            a.materials()[x.material].name,
+            b.materials()[y.material].name
         );
     }
+    ma.len()
+}
+
+#[test]
+fn compressed_buffer_views_decode_to_the_uncompressed_pack_bit_for_bit() {
+    let plain = asset("blender_scene_instanced.glb");
+    let packed = asset("blender_scene_meshopt.glb");
+    let n = assert_same_meshes(&plain, &packed);
+    assert!(n >= 5, "the scene's meshes, its pillars instanced");
     assert_eq!(plain.lights().len(), packed.lights().len());
 }
 
@@ -111,10 +117,8 @@ fn moments(m: &Mesh) -> (f32, glam::Vec3, [glam::Vec3; 2], glam::Vec3) {
 
 #[test]
 fn filtered_views_match_the_uncompressed_pack_to_their_precision() {
-    let (plain, packed) = (
-        asset("blender_scene_instanced.glb"),
-        asset("blender_scene_meshopt_filters.glb"),
-    );
+    let plain = asset("blender_scene_instanced.glb");
+    let packed = asset("blender_scene_meshopt_filters.glb");
     let (a, b) = (meshes(&plain), meshes(&packed));
     assert_eq!(a.len(), b.len());
     // `-cc` orders vertices and triangles its own way: compare what does
@@ -175,23 +179,9 @@ fn a_text_file_with_a_fallback_buffer_loads_the_box() {
 /// filters does.
 #[test]
 fn the_khronos_extensions_version_one_decodes_as_the_vendor_ones_pack() {
-    let (ext, khr) = (
-        asset("blender_scene_meshopt_filters.glb"),
-        asset("blender_scene_meshopt_khr.glb"),
-    );
-    let (a, b) = (meshes(&ext), meshes(&khr));
-    assert_eq!(a.len(), b.len());
-    let bits = |v: &[glam::Vec3]| {
-        v.iter()
-            .map(|p| p.to_array().map(f32::to_bits))
-            .collect::<Vec<_>>()
-    };
-    for (ma, mb) in a.iter().zip(&b) {
-        assert_eq!(rotated(&ma.indices), rotated(&mb.indices), "{}", ma.name);
-        assert_eq!(bits(&ma.positions), bits(&mb.positions), "{}", ma.name);
-        assert_eq!(bits(&ma.normals), bits(&mb.normals), "{}", ma.name);
-        assert_eq!(ma.texcoords, mb.texcoords, "{}", ma.name);
-    }
+    let ext = asset("blender_scene_meshopt_filters.glb");
+    let khr = asset("blender_scene_meshopt_khr.glb");
+    assert_same_meshes(&ext, &khr);
 }
 
 /// `tests/gltf/meshopt_khr_colours.gltf`: gltfpack's `-cc -ce khr -kn -km`
