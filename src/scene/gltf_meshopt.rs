@@ -416,6 +416,12 @@ fn decode_triangles(src: &[u8], count: usize) -> std::result::Result<Vec<u32>, S
     };
     let mut fifo = Fifos::default();
     let (mut next, mut last) = (0u32, 0u32);
+    // `next` counts up with 32-bit wraparound, as the extensions say.
+    let bump = |next: &mut u32| {
+        let v = *next;
+        *next = v.wrapping_add(1);
+        v
+    };
     let index = |data: &mut Bytes, last: &mut u32| -> std::result::Result<u32, String> {
         *last = last.wrapping_add_signed(unzigzag32(data.varint()?));
         Ok(*last)
@@ -427,9 +433,9 @@ fn decode_triangles(src: &[u8], count: usize) -> std::result::Result<Vec<u32>, S
             let (a, b) = fifo.edge(hi)?;
             let c = match lo {
                 0 => {
-                    next += 1;
-                    fifo.push_vertex(next - 1);
-                    next - 1
+                    let c = bump(&mut next);
+                    fifo.push_vertex(c);
+                    c
                 }
                 1..=12 => fifo.vertex(lo)?,
                 13 | 14 => {
@@ -464,15 +470,11 @@ fn decode_triangles(src: &[u8], count: usize) -> std::result::Result<Vec<u32>, S
             let a = if lo == 15 {
                 index(&mut data, &mut last)?
             } else {
-                next += 1;
-                next - 1
+                bump(&mut next)
             };
             let mut other = |x: u8, data: &mut Bytes| -> std::result::Result<(u32, bool), String> {
                 Ok(match x {
-                    0 => {
-                        next += 1;
-                        (next - 1, true)
-                    }
+                    0 => (bump(&mut next), true),
                     15 if explicit => (index(data, &mut last)?, true),
                     _ => (fifo.vertex(x - 1)?, false),
                 })
