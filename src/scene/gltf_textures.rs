@@ -136,7 +136,7 @@ impl<'a> TextureLoader<'a> {
         if let Some(&i) = self.loaded.get(&t.index()) {
             return Ok(Some(i));
         }
-        if !self.has_source(t) {
+        let Some(image) = self.image_of(t) else {
             if !self.sourceless.contains(&t.index()) {
                 self.sourceless.push(t.index());
                 let label = super::gltf_checks::label("texture", t.index(), t.name());
@@ -147,8 +147,8 @@ impl<'a> TextureLoader<'a> {
                 ));
             }
             return Ok(None);
-        }
-        let texture = self.load(t)?;
+        };
+        let texture = self.load(t, image)?;
         let i = scene.add_texture(texture);
         self.loaded.insert(t.index(), i);
         Ok(Some(i))
@@ -246,15 +246,9 @@ impl<'a> TextureLoader<'a> {
         (i < self.json.images.len()).then_some(i)
     }
 
-    fn has_source(&self, t: &gltf::Texture) -> bool {
-        self.image_of(t).is_some()
-    }
-
-    /// Decodes the image of `t`, which has one ([`Self::has_source`]).
-    fn load(&mut self, t: &gltf::Texture) -> Result<Texture> {
-        let i = self
-            .image_of(t)
-            .ok_or_else(|| Error::InvalidScene("a texture without an image".into()))?;
+    /// Decodes image `i`, the one glTF texture `t` reads
+    /// ([`Self::image_of`]), with `t`'s sampler.
+    fn load(&mut self, t: &gltf::Texture, i: usize) -> Result<Texture> {
         let image = &self.json.images[i];
         let what = super::gltf_checks::label("image", i, image.name.as_deref());
         let bytes = self.image_bytes(image, &what)?;
