@@ -5,7 +5,7 @@
 //! Physically Based Shading at Imageworks*, one of the couplings the glTF
 //! specification's Appendix B points to).
 //!
-//! `E_F(mu; alpha, f0) = f0 + (1 - f0) W(mu, alpha)`, with `W` the mean
+//! `E_F(mu; alpha, f0, f90) = f0 + (f90 - f0) W(mu, alpha)`, with `W` the mean
 //! Schlick weight of the visible normals ([`LobeEnergy::schlick`]) at the
 //! nodes, bilinear between them. The hemispherical average
 //! `E_avg = 2 integral E_F(mu) mu dmu` is that of the interpolated table
@@ -82,10 +82,13 @@ fn rough_cell(alpha: f32) -> (usize, f32) {
     (j, (x - j as f32).clamp(0.0, 1.0))
 }
 
-/// `E_F(mu; alpha, f0)`: the fraction of the light arriving at cosine `mu`
-/// that the facets it first meets reflect, on a GGX surface of `alpha`
-/// under Schlick's Fresnel of `f0`; the rest enters the surface.
-pub(crate) fn fresnel_energy(mu: f32, alpha: f32, f0: f32) -> f32 {
+/// `W(mu, alpha)`: the mean Schlick weight `(1 - |wi.m|)^5` of the normals
+/// visible from cosine `mu` on a GGX surface of `alpha`. Schlick's Fresnel
+/// `f0 + (f90 - f0) w` is linear in the weight, so the facets reflect
+/// `E_F = f0 + (f90 - f0) W` of the light at first contact, for any `f0`
+/// and `f90` (per channel when `f0` is coloured); the rest enters the
+/// surface.
+pub(crate) fn schlick_energy_weight(mu: f32, alpha: f32) -> f32 {
     let t = table();
     let (j, v) = rough_cell(alpha);
     let x = mu.clamp(0.0, 1.0) * (MU_NODES - 1) as f32;
@@ -95,17 +98,27 @@ pub(crate) fn fresnel_energy(mu: f32, alpha: f32, f0: f32) -> f32 {
         let k = j * MU_NODES + i;
         t.w[k] + (t.w[k + 1] - t.w[k]) * u
     };
-    let w = row(j) + (row(j + 1) - row(j)) * v;
-    f0 + (1.0 - f0) * w
+    row(j) + (row(j + 1) - row(j)) * v
 }
 
-/// `E_avg(alpha, f0) = 2 integral fresnel_energy(mu) mu dmu`, exactly for
-/// the interpolated table.
-pub(crate) fn average_fresnel_energy(alpha: f32, f0: f32) -> f32 {
+/// `2 integral W(mu) mu dmu`, exactly for the interpolated table: `E_avg =
+/// f0 + (f90 - f0)` times it.
+pub(crate) fn average_schlick_weight(alpha: f32) -> f32 {
     let t = table();
     let (j, v) = rough_cell(alpha);
-    let w = t.avg[j] + (t.avg[j + 1] - t.avg[j]) * v;
-    f0 + (1.0 - f0) * w
+    t.avg[j] + (t.avg[j + 1] - t.avg[j]) * v
+}
+
+/// `E_F(mu; alpha, f0)` with `f90 = 1`.
+#[cfg(test)]
+fn fresnel_energy(mu: f32, alpha: f32, f0: f32) -> f32 {
+    f0 + (1.0 - f0) * schlick_energy_weight(mu, alpha)
+}
+
+/// `E_avg(alpha, f0) = 2 integral fresnel_energy(mu) mu dmu` with `f90 = 1`.
+#[cfg(test)]
+fn average_fresnel_energy(alpha: f32, f0: f32) -> f32 {
+    f0 + (1.0 - f0) * average_schlick_weight(alpha)
 }
 
 #[cfg(test)]

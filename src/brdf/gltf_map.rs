@@ -1,6 +1,7 @@
 //! From glTF 2.0 materials to this crate's models: the core
 //! metallic-roughness factors and the extensions `KHR_materials_ior`,
-//! `KHR_materials_transmission` and `KHR_materials_volume`.
+//! `KHR_materials_specular`, `KHR_materials_transmission` and
+//! `KHR_materials_volume`.
 //!
 //! Inputs ([`GltfMaterial`]): `base_color` (linear RGB in [0, 1]), `metallic`
 //! in [0, 1], `roughness` (glTF's perceptual roughness) in [0, 1]; the
@@ -13,6 +14,18 @@
 //! `f0 = mix(f0_d, base_color, metallic)` with the dielectric
 //! `f0_d = ((ior - 1) / (ior + 1))^2` (`KHR_materials_ior`; 0.04 for the
 //! default IOR 1.5), and the diffuse base `base_color (1 - metallic)`.
+//!
+//! `KHR_materials_specular` changes the dielectric's Fresnel term as the
+//! extension defines it: with `specularFactor = s` in [0, 1] and
+//! `specularColorFactor = c` (RGB, each channel >= 0, and above 1 allowed),
+//! `f0_d = min(((ior - 1) / (ior + 1))^2 c, 1) s` per channel and the
+//! grazing reflectance `f90_d = s` (1 without the extension). The metal's
+//! Fresnel is not touched (`f90 = mix(f90_d, 1, metallic)`), and the
+//! diffuse base takes what the coloured `E_F` leaves, channel by channel
+//! ([`GltfPbr`]). `s = 0` turns the dielectric's reflection off: its base
+//! then reflects all of `base_color`. The extension's textures multiply
+//! the factors (`specularTexture`'s alpha, `specularColorTexture`'s sRGB
+//! colour) where the scene loader reads them.
 //! Beckmann [`super::CookTorrance`] is not used for glTF materials (it stays
 //! available to code and to `adaptive-pm analyze`).
 //!
@@ -20,7 +33,8 @@
 //! 1. `metallic = 1` and `alpha < MIN_ALPHA` (roughness below 0.032) →
 //!    [`Mirror`] of reflectance `base_color` (a polished metal; Schlick's
 //!    rise towards white at grazing angles is dropped);
-//! 2. `metallic = 0`, `roughness = 1` and `f0_d <= 0.04` (IOR at most 1.5) →
+//! 2. `metallic = 0`, `roughness = 1` and every channel of `f0_d` at most
+//!    0.04 (IOR at most 1.5, no stronger specular colour) →
 //!    [`Lambert`] of albedo `base_color`: a matte dielectric, whose 4 %
 //!    specular sheen the photon counts cannot tell from diffuse. This is an
 //!    approximation of the specification's BRDF (whose diffuse base is
@@ -65,8 +79,12 @@
 //! whatever part scatters at its boundary.
 //! [`from_gltf_material`], which returns one BRDF, refuses a mix.
 //!
-//! The extensions' textures are
-//! ignored (the opaque materials' base colour and metallic-roughness
+//! `KHR_materials_specular` shapes the opaque part only: the glass part
+//! keeps the exact Fresnel term of its IOR (the scene loader warns when the
+//! extension would change it).
+//!
+//! The extensions' textures, but `KHR_materials_specular`'s, are ignored
+//! (the opaque materials' base colour, metallic-roughness and specular
 //! textures are read by the scene loader, which maps each point's factors
 //! here).
 //!
@@ -98,6 +116,9 @@ pub struct GltfMaterial {
     pub ior: Option<f32>,
     /// `KHR_materials_volume`; `None` without the extension (a thin wall).
     pub volume: Option<GltfVolume>,
+    /// `KHR_materials_specular`; `None` without the extension (as its
+    /// defaults: no change).
+    pub specular: Option<GltfSpecular>,
 }
 
 impl GltfMaterial {
@@ -110,7 +131,61 @@ impl GltfMaterial {
             transmission: None,
             ior: None,
             volume: None,
+            specular: None,
         }
+    }
+}
+
+/// The factors of `KHR_materials_specular` (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GltfSpecular {
+    /// `specularFactor` in [0, 1]: scales the dielectric's reflection at
+    /// every angle.
+    pub factor: f32,
+    /// `specularColorFactor`: linear RGB, each channel finite and >= 0,
+    /// multiplying the dielectric's reflectance at normal incidence (the
+    /// product is clamped to 1).
+    pub color: Vec3,
+}
+
+impl Default for GltfSpecular {
+    /// The extension's defaults: no change.
+    fn default() -> Self {
+        GltfSpecular {
+            factor: 1.0,
+            color: Vec3::ONE,
+        }
+    }
+}
+
+impl GltfSpecular {
+    /// Checks the factors against the extension's ranges.
+    fn check(self) -> Result<Self> {
+        let s = self.factor;
+        if !(0.0..=1.0).contains(&s) {
+            return Err(Error::param(
+                "gltf specularFactor",
+                format!("must be in [0, 1], got {s}"),
+            ));
+        }
+        let c = self.color;
+        if !c.is_finite() || c.min_element() < 0.0 {
+            return Err(Error::param(
+                "gltf specularColorFactor",
+                format!("must be finite and >= 0 in every channel, got {c}"),
+            ));
+        }
+        Ok(self)
+    }
+
+    /// The dielectric's `(f0_d, f90_d)` over a dielectric of reflectance
+    /// `f0` at normal incidence (checked factors).
+    fn fresnel(&self, f0: f32) -> (Vec3, f32) {
+        if *self == Self::default() {
+            // The bits of the model without the extension.
+            return (Vec3::splat(f0), 1.0);
+        }
+        ((Vec3::splat(f0) * self.color).min(Vec3::ONE) * self.factor, self.factor)
     }
 }
 
@@ -213,6 +288,8 @@ pub struct GltfLobes {
 /// - `ior` is neither 0 nor in [1, 4];
 /// - `thicknessFactor` is negative or not finite, `attenuationDistance` is
 ///   not > 0, or an `attenuationColor` channel is outside [0, 1];
+/// - `specularFactor` is NaN or outside [0, 1], or a `specularColorFactor`
+///   channel is negative or not finite;
 /// - the material transmits partly (`0 < transmissionFactor < 1`, or
 ///   transmission on a partial metal, `0 < metallic < 1`), which one BRDF
 ///   cannot hold ([`gltf_lobes`] maps it; a full metal transmits nothing:
@@ -265,6 +342,7 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
         ));
     }
     let volume = m.volume.unwrap_or_default().check()?;
+    let (f0_d, f90_d) = m.specular.unwrap_or_default().check()?.fresnel(dielectric_f0(ior));
     let (metallic, roughness) = (m.metallic, m.roughness);
     let alone = |surface| {
         Ok(GltfLobes {
@@ -276,7 +354,7 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     // IOR 0: the Fresnel term is 1, no light enters, nothing is transmitted.
     // A full metal has no dielectric part to transmit through.
     if transmission == 0.0 || ior == 0.0 || metallic == 1.0 {
-        return alone(opaque(base_color, metallic, roughness, dielectric_f0(ior))?);
+        return alone(opaque(base_color, metallic, roughness, f0_d, f90_d)?);
     }
     // The glass part's share, and the rest: the metal and the opaque
     // dielectric, which the opaque mapping mixes linearly in `metallic`.
@@ -296,7 +374,7 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     // `rest` is `metallic` exactly at transmissionFactor 1: a full metal.
     let metal = (metallic / rest).min(1.0);
     Ok(GltfLobes {
-        surface: opaque(base_color, metal, roughness, dielectric_f0(ior))?,
+        surface: opaque(base_color, metal, roughness, f0_d, f90_d)?,
         transmitted: Some((share, glass)),
         surface_factors: GltfMaterial {
             metallic: metal,
@@ -318,17 +396,17 @@ fn dielectric_f0(ior: f32) -> f32 {
 }
 
 /// The opaque mapping of checked factors (module docs), with dielectric
-/// Fresnel reflectance `f0_d`.
-fn opaque(base_color: Vec3, metallic: f32, roughness: f32, f0_d: f32) -> Result<Brdf> {
+/// Fresnel reflectance `f0_d` at normal and `f90_d` at grazing incidence.
+fn opaque(base_color: Vec3, metallic: f32, roughness: f32, f0_d: Vec3, f90_d: f32) -> Result<Brdf> {
     let alpha = roughness * roughness;
     if metallic == 1.0 && alpha < GltfPbr::MIN_ALPHA {
         return Ok(Mirror::new(base_color)?.into());
     }
-    if metallic == 0.0 && roughness == 1.0 && f0_d <= 0.04 {
+    if metallic == 0.0 && roughness == 1.0 && f0_d.max_element() <= 0.04 {
         return Ok(Lambert::new(base_color)?.into());
     }
     let alpha = alpha.max(GltfPbr::MIN_ALPHA);
-    Ok(GltfPbr::new(base_color, metallic, alpha, f0_d)?.into())
+    Ok(GltfPbr::with_specular(base_color, metallic, alpha, f0_d, f90_d)?.into())
 }
 
 #[cfg(test)]

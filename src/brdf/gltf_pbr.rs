@@ -5,21 +5,26 @@
 //!
 //! Parameters: `base_color` (linear RGB in [0, 1]), `metallic` in [0, 1],
 //! `alpha` (glTF's roughness squared) in [[`GltfPbr::MIN_ALPHA`], 1], and the
-//! dielectric Fresnel reflectance at normal incidence `f0_d` in [0, 1]
-//! (0.04 for glTF's default IOR 1.5; `KHR_materials_ior` changes it).
+//! dielectric's Fresnel reflectance at normal incidence `f0_d` (RGB, each
+//! channel in [0, 1]) and at grazing incidence `f90_d` in [0, 1]: 0.04 and 1
+//! for glTF's default IOR 1.5; `KHR_materials_ior` changes `f0_d`, and
+//! `KHR_materials_specular` colours and scales it and scales `f90_d`
+//! (`brdf/gltf_map.rs`).
 //!
 //! With `h = normalize(wi + wo)` and `w = (1 - |wi.h|)^5`:
 //! ```text
 //! f0       = mix(f0_d, base_color, metallic)
-//! F        = f0 + (1 - f0) w                       (Schlick, per channel)
+//! f90      = mix(f90_d, 1, metallic)
+//! F        = f0 + (f90 - f0) w                     (Schlick, per channel)
 //! specular = F D(h) G(wi, wo) / (4 cos_i cos_o)
 //! diffuse  = base_color (1 - metallic) / pi
-//!            (1 - E_F(cos_i)) (1 - E_F(cos_o)) / (1 - E_avg)
+//!            (1 - E_F(cos_i)) (1 - E_F(cos_o)) / (1 - E_avg)   (per channel)
 //! f_r      = diffuse + specular
 //! ```
 //! This is the specification's `mix(dielectric_brdf, metal_brdf, metallic)`:
-//! Schlick's term is linear in `f0`, so the metal's and the dielectric's
-//! specular lobes merge into one of Fresnel `F(mix(f0_d, base_color,
+//! Schlick's term is linear in `f0` and `f90`, so the metal's (`f0 =
+//! base_color`, `f90 = 1`) and the dielectric's specular lobes merge into
+//! one of Fresnel `F(mix(f0_d, base_color, metallic), mix(f90_d, 1,
 //! metallic))`, and only the dielectric carries the diffuse base. `D` is
 //! GGX and `G / (4 cos_i cos_o)` the specification's height-correlated
 //! visibility term `V`; the tests compare the specular lobe and the metal
@@ -34,8 +39,9 @@
 //! physically based simulation for a BRDF that is "positive, reciprocal, and
 //! energy conserving", and names couplings that are; this is Kulla and
 //! Conty's (2017): `E_F(mu)` is the fraction of the light arriving at cosine
-//! `mu` that the dielectric's facets (`f0_d`) reflect at first contact,
-//! `f0_d + (1 - f0_d) W(mu)` with `W` the mean Schlick weight of the normals
+//! `mu` that the dielectric's facets (`f0_d`, `f90_d`) reflect at first
+//! contact, `f0_d + (f90_d - f0_d) W(mu)` per channel, with `W` the mean
+//! Schlick weight of the normals
 //! visible from that direction, and `E_avg` its cosine-weighted hemispherical
 //! average; both are tabulated once over `mu` and the roughness
 //! (`brdf/ggx_energy.rs`). The base then reflects exactly
@@ -56,7 +62,7 @@
 //! direction below the horizon is a failed sample (`None`).
 
 use super::ggx::Ggx;
-use super::ggx_energy::{average_fresnel_energy, fresnel_energy};
+use super::ggx_energy::{average_schlick_weight, schlick_energy_weight};
 use super::phong::check_rgb01;
 use super::BrdfSample;
 use crate::error::{Error, Result};
@@ -70,13 +76,15 @@ pub struct GltfPbr {
     ggx: Ggx,
     base_color: Vec3,
     metallic: f32,
-    f0_d: f32,
+    f0_d: Vec3,
+    f90_d: f32,
     // Derived from the above once, as every evaluation needs them.
     f0: Vec3,
+    f90: f32,
     kd: Vec3,
-    /// `1 / (pi (1 - E_avg))`, 0 when no light enters the base (`f0_d = 1`)
-    /// or it has no colour (a metal).
-    base_scale: f32,
+    /// `1 / (pi (1 - E_avg))` per channel, 0 in a channel no light enters
+    /// (`E_avg = 1`), and in all when the base has no colour (a metal).
+    base_scale: Vec3,
 }
 
 /// Schlick's weight `(1 - c)^5`.
@@ -99,36 +107,65 @@ impl GltfPbr {
     /// `f0_d` is NaN or outside [0, 1], or `alpha` NaN or outside
     /// [[`Self::MIN_ALPHA`], 1].
     pub fn new(base_color: Vec3, metallic: f32, alpha: f32, f0_d: f32) -> Result<Self> {
+        Self::with_specular(base_color, metallic, alpha, Vec3::splat(f0_d), 1.0)
+    }
+
+    /// The glTF BRDF whose dielectric reflects `f0_d` (per channel) at
+    /// normal incidence and `f90_d` at grazing incidence: what
+    /// `KHR_materials_specular` sets. [`Self::new`] is `f0_d` grey and
+    /// `f90_d = 1`.
+    ///
+    /// # Errors
+    /// As [`Self::new`], and when an `f0_d` channel or `f90_d` is NaN or
+    /// outside [0, 1].
+    pub fn with_specular(
+        base_color: Vec3,
+        metallic: f32,
+        alpha: f32,
+        f0_d: Vec3,
+        f90_d: f32,
+    ) -> Result<Self> {
         if !(Self::MIN_ALPHA..=1.0).contains(&alpha) {
             return Err(Error::param(
                 "gltf-pbr alpha",
                 format!("must be in [{}, 1], got {alpha}", Self::MIN_ALPHA),
             ));
         }
-        for (name, v) in [("gltf-pbr metallic", metallic), ("gltf-pbr f0_d", f0_d)] {
+        for (name, v) in [("gltf-pbr metallic", metallic), ("gltf-pbr f90_d", f90_d)] {
             if !(0.0..=1.0).contains(&v) {
                 return Err(Error::param(name, format!("must be in [0, 1], got {v}")));
             }
         }
         let base_color = check_rgb01("gltf-pbr base colour", base_color)?;
-        Ok(Self::derive(Ggx { alpha }, base_color, metallic, f0_d))
+        let f0_d = check_rgb01("gltf-pbr f0_d", f0_d)?;
+        Ok(Self::derive(Ggx { alpha }, base_color, metallic, f0_d, f90_d))
     }
 
     /// The model of checked parameters, its derived terms computed.
-    fn derive(ggx: Ggx, base_color: Vec3, metallic: f32, f0_d: f32) -> Self {
+    fn derive(ggx: Ggx, base_color: Vec3, metallic: f32, f0_d: Vec3, f90_d: f32) -> Self {
         let kd = base_color * (1.0 - metallic);
-        let rest = 1.0 - average_fresnel_energy(ggx.alpha, f0_d);
-        let base_scale = if rest > 0.0 && kd.max_element() > 0.0 {
-            FRAC_1_PI / rest
-        } else {
-            0.0
+        let w_avg = average_schlick_weight(ggx.alpha);
+        let scale = |f0: f32| {
+            let rest = 1.0 - (f0 + (f90_d - f0) * w_avg);
+            if rest > 0.0 {
+                FRAC_1_PI / rest
+            } else {
+                0.0
+            }
+        };
+        let base_scale = match kd.max_element() > 0.0 {
+            true => Vec3::new(scale(f0_d.x), scale(f0_d.y), scale(f0_d.z)),
+            false => Vec3::ZERO,
         };
         GltfPbr {
             ggx,
             base_color,
             metallic,
             f0_d,
-            f0: Vec3::splat(f0_d).lerp(base_color, metallic),
+            f90_d,
+            f0: f0_d.lerp(base_color, metallic),
+            // Written so that `f90_d = 1` gives 1 exactly, whatever `metallic`.
+            f90: f90_d + (1.0 - f90_d) * metallic,
             kd,
             base_scale,
         }
@@ -144,7 +181,7 @@ impl GltfPbr {
         } else {
             self.base_color
         };
-        Self::derive(self.ggx, base_color, self.metallic, self.f0_d)
+        Self::derive(self.ggx, base_color, self.metallic, self.f0_d, self.f90_d)
     }
 
     /// GGX alpha (glTF's roughness squared).
@@ -162,15 +199,27 @@ impl GltfPbr {
         self.metallic
     }
 
-    /// The dielectric Fresnel reflectance at normal incidence.
-    pub fn dielectric_f0(&self) -> f32 {
+    /// The dielectric Fresnel reflectance at normal incidence, per channel.
+    pub fn dielectric_f0(&self) -> Vec3 {
         self.f0_d
+    }
+
+    /// The dielectric Fresnel reflectance at grazing incidence (1 unless
+    /// `KHR_materials_specular` scales it).
+    pub fn dielectric_f90(&self) -> f32 {
+        self.f90_d
     }
 
     /// The specular lobe's Fresnel reflectance at normal incidence,
     /// `mix(f0_d, base_color, metallic)`.
     pub fn f0(&self) -> Vec3 {
         self.f0
+    }
+
+    /// The specular lobe's Fresnel reflectance at grazing incidence,
+    /// `mix(f90_d, 1, metallic)`.
+    pub fn f90(&self) -> f32 {
+        self.f90
     }
 
     /// The diffuse base's colour, `base_color (1 - metallic)`.
@@ -180,18 +229,20 @@ impl GltfPbr {
 
     /// Schlick's Fresnel of the specular lobe at `|wi.h| = c`, per channel.
     fn fresnel(&self, c: f32) -> Vec3 {
-        self.f0 + (Vec3::ONE - self.f0) * schlick_weight(c)
+        self.f0 + (Vec3::splat(self.f90) - self.f0) * schlick_weight(c)
     }
 
-    /// `1 - E_F(mu)`: the share of the light arriving at cosine `mu` that
-    /// enters the dielectric base.
-    fn entering(&self, mu: f32) -> f32 {
-        (1.0 - fresnel_energy(mu, self.ggx.alpha, self.f0_d)).max(0.0)
+    /// `1 - E_F(mu)` per channel: the share of the light arriving at cosine
+    /// `mu` that enters the dielectric base.
+    fn entering(&self, mu: f32) -> Vec3 {
+        let w = schlick_energy_weight(mu, self.ggx.alpha);
+        let e = self.f0_d + (Vec3::splat(self.f90_d) - self.f0_d) * w;
+        (Vec3::ONE - e).max(Vec3::ZERO)
     }
 
     /// The diffuse base's value for a pair of cosines (module docs).
     fn diffuse(&self, cos_i: f32, cos_o: f32) -> Vec3 {
-        if self.base_scale == 0.0 {
+        if self.base_scale == Vec3::ZERO {
             return Vec3::ZERO;
         }
         self.kd * (self.entering(cos_i) * self.entering(cos_o) * self.base_scale)
@@ -199,7 +250,7 @@ impl GltfPbr {
 
     /// The base's albedo `kd (1 - E_F(cos_i))`.
     fn albedo_of_base(&self, cos_i: f32) -> Vec3 {
-        if self.base_scale == 0.0 {
+        if self.base_scale == Vec3::ZERO {
             return Vec3::ZERO;
         }
         self.kd * self.entering(cos_i)
@@ -274,7 +325,7 @@ impl GltfPbr {
 
     /// Directional albedo, per channel: the base's
     /// `kd (1 - E_F(cos_i))` in closed form (module docs), and the
-    /// specular lobe's `f0 E1 + (1 - f0) Ew` from a 32 x 32 quadrature of
+    /// specular lobe's `f0 E1 + (f90 - f0) Ew` from a 32 x 32 quadrature of
     /// the visible-normal sampler (`Ggx::lobe_energy`). 1024 evaluations:
     /// cache it if it is needed per hit.
     pub fn albedo(&self, wi: Vec3) -> Vec3 {
@@ -287,7 +338,7 @@ impl GltfPbr {
     /// The specular lobe's share of [`Self::albedo`].
     fn albedo_of_specular(&self, wi: Vec3) -> Vec3 {
         let e = self.ggx.lobe_energy(wi);
-        self.f0 * e.shadowed + (Vec3::ONE - self.f0) * e.shadowed_schlick
+        self.f0 * e.shadowed + (Vec3::splat(self.f90) - self.f0) * e.shadowed_schlick
     }
 }
 

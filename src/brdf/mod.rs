@@ -30,7 +30,8 @@ pub mod rough_dielectric;
 pub use cook_torrance::CookTorrance;
 pub use dielectric::{Dielectric, Transport};
 pub use gltf_map::{
-    from_gltf_material, from_gltf_pbr, gltf_lobes, GltfLobes, GltfMaterial, GltfVolume,
+    from_gltf_material, from_gltf_pbr, gltf_lobes, GltfLobes, GltfMaterial, GltfSpecular,
+    GltfVolume,
 };
 pub use gltf_pbr::GltfPbr;
 pub use lambert::Lambert;
@@ -310,8 +311,15 @@ impl Brdf {
             }
             Brdf::GltfPbr(b) => {
                 let c = b.base_color();
-                let (m, a, f) = (b.metallic(), b.alpha(), b.dielectric_f0());
-                (7, [c.x, c.y, c.z, m, a, f, 0.0, 0.0, 0.0])
+                let (m, a, f, f90) = (b.metallic(), b.alpha(), b.dielectric_f0(), b.dielectric_f90());
+                // A grey f0 and f90 = 1 (no KHR_materials_specular) keep the
+                // tag and layout of before it, so the analysis draws the
+                // numbers it drew (it is seeded by `key`).
+                if f == Vec3::splat(f.x) && f90 == 1.0 {
+                    (7, [c.x, c.y, c.z, m, a, f.x, 0.0, 0.0, 0.0])
+                } else {
+                    (8, [c.x, c.y, c.z, m, a, f.x, f.y, f.z, f90])
+                }
             }
             Brdf::Mirror(b) => {
                 let r = b.reflectance();

@@ -50,11 +50,15 @@ fn brdf_name(b: &Brdf) -> String {
             )
         }
         Brdf::GltfPbr(g) => format!(
-            "gltf-pbr base {} metallic {} alpha {} f0 {}",
+            "gltf-pbr base {} metallic {} alpha {} f0 {}{}",
             rgb(g.base_color()),
             g.metallic(),
             g.alpha(),
-            g.dielectric_f0()
+            rgb(g.dielectric_f0()),
+            match g.dielectric_f90() {
+                1.0 => String::new(),
+                f90 => format!(" f90 {f90}"),
+            }
         ),
         Brdf::Mirror(m) => format!("mirror {}", rgb(m.reflectance())),
         Brdf::Dielectric(d) => format!(

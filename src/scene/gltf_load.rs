@@ -20,9 +20,10 @@
 //!   [`Scene`] as meshes are added, not here (later nodes may add geometry).
 //! - The first perspective camera found becomes [`Scene::camera`].
 //! - Materials map to BRDFs by [`crate::brdf::gltf_map::gltf_lobes`]:
-//!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_transmission`
-//!   (glass) and `KHR_materials_volume` (thin wall or refracting volume,
-//!   absorption); partial transmission (or transmission on a partial
+//!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_specular`
+//!   (the dielectric's Fresnel colour and strength, with its textures),
+//!   `KHR_materials_transmission` (glass) and `KHR_materials_volume` (thin
+//!   wall or refracting volume, absorption); partial transmission (or transmission on a partial
 //!   metal) is its opaque part and a glass part
 //!   ([`super::TransmissionMix`]); a value outside its range and a
 //!   transmitting partial metal with a metallic-roughness texture are
@@ -53,7 +54,9 @@ use super::assets::AssetRoot;
 use super::gltf_quantized::read_f32_vectors;
 use super::gltf_skin::{JointMatrices, Skinning};
 use super::{Camera, DirectionalLight, Emission, Light, Material, PointLight, Scene, SpotLight};
-use crate::brdf::gltf_map::{from_gltf_material, gltf_lobes, GltfMaterial, GltfVolume};
+use crate::brdf::gltf_map::{
+    from_gltf_material, gltf_lobes, GltfMaterial, GltfSpecular, GltfVolume,
+};
 use crate::brdf::Brdf;
 use crate::emitter::CosN;
 use crate::error::{Error, Result};
@@ -149,6 +152,7 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
             transmitted,
         } = convert_material(&m)?;
         let specular = material.brdf.is_specular();
+        warn_specular_on_glass(&m, &material.brdf, transmitted.is_some(), &mut scene);
         let id = scene.add_material(material);
         if let Some((weight, glass)) = transmitted {
             scene.set_transmission_mix(id, weight, glass)?;
@@ -457,6 +461,26 @@ fn load_mesh(
     Ok(())
 }
 
+/// Warns when `KHR_materials_specular` would change the Fresnel term of a
+/// material's glass part, which keeps its IOR's exact one
+/// (`brdf/gltf_map.rs`).
+fn warn_specular_on_glass(m: &gltf::Material, brdf: &Brdf, partly: bool, scene: &mut Scene) {
+    let glass = partly || matches!(brdf, Brdf::Dielectric(_) | Brdf::RoughDielectric(_));
+    let changes = m.specular().is_some_and(|s| {
+        s.specular_factor() != 1.0
+            || s.specular_color_factor() != [1.0; 3]
+            || s.specular_texture().is_some()
+            || s.specular_color_texture().is_some()
+    });
+    if glass && changes {
+        let label = super::gltf_textures::material_label(m);
+        scene.warnings.push(format!(
+            "{label}: KHR_materials_specular is not modelled on its transmitting (glass) part, \
+             which reflects by its IOR's Fresnel term"
+        ));
+    }
+}
+
 /// The factors of glTF 2.0's default material: white, metallic 1,
 /// roughness 1.
 fn spec_default_factors() -> GltfMaterial {
@@ -499,13 +523,7 @@ fn load_colors(
     };
     scene.set_vertex_colors(mesh, colors)?;
     if scene.material_maps(material).is_none() {
-        let maps = super::textured::MaterialMaps {
-            factors,
-            base_color: None,
-            metallic_roughness: None,
-            normal: None,
-        };
-        scene.set_material_maps(material, maps)?;
+        scene.set_material_maps(material, super::textured::MaterialMaps::new(factors))?;
     }
     Ok(())
 }
@@ -549,6 +567,10 @@ fn convert_material(m: &gltf::Material) -> Result<Converted> {
             thickness: v.thickness_factor(),
             attenuation_distance: v.attenuation_distance(),
             attenuation_color: Vec3::from(v.attenuation_color()),
+        }),
+        specular: m.specular().map(|s| GltfSpecular {
+            factor: s.specular_factor(),
+            color: Vec3::from(s.specular_color_factor()),
         }),
     };
     let lobes = gltf_lobes(&input).map_err(|e| Error::InvalidScene(format!("{label}: {e}")))?;

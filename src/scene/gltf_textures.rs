@@ -87,47 +87,45 @@ impl<'a> TextureLoader<'a> {
         let label = material_label(m);
         warn_unmodelled(m, &label, scene);
         let pbr = m.pbr_metallic_roughness();
-        let (base, mr) = (pbr.base_color_texture(), pbr.metallic_roughness_texture());
+        let ext = m.specular();
+        // The textures that shape the BRDF: base colour, metallic-roughness,
+        // specular strength, specular colour.
+        let mut shaping = [
+            pbr.base_color_texture(),
+            pbr.metallic_roughness_texture(),
+            ext.as_ref().and_then(|s| s.specular_texture()),
+            ext.as_ref().and_then(|s| s.specular_color_texture()),
+        ];
         let normal = m.normal_texture();
-        if base.is_none() && mr.is_none() && normal.is_none() {
-            return Ok(None);
-        }
         // A mirror or glass bends its normals, but scatters by its factors.
-        let (base, mr) = match specular && (base.is_some() || mr.is_some()) {
-            true => {
-                scene.warnings.push(format!(
-                    "{label}: its base colour and metallic-roughness textures are not read \
-                     (a mirror or glass scatters by its factors; \
-                     only an alphaMode MASK reads the base colour texture's alpha)"
-                ));
-                (None, None)
+        if specular && shaping.iter().any(Option::is_some) {
+            scene.warnings.push(format!(
+                "{label}: its base colour, metallic-roughness and specular textures are not \
+                 read (a mirror or glass scatters by its factors; \
+                 only an alphaMode MASK reads the base colour texture's alpha)"
+            ));
+            shaping = [None, None, None, None];
+        }
+        if shaping.iter().all(Option::is_none) && normal.is_none() {
+            return Ok(None);
+        }
+        let mut maps = MaterialMaps::new(factors);
+        let [base, mr, strength, colour] = shaping;
+        for (info, slot) in [
+            (base, &mut maps.base_color),
+            (mr, &mut maps.metallic_roughness),
+            (strength, &mut maps.specular),
+            (colour, &mut maps.specular_color),
+        ] {
+            if let Some(info) = info {
+                *slot = self.texture_ref(&info, scene)?;
             }
-            false => (base, mr),
-        };
-        if base.is_none() && mr.is_none() && normal.is_none() {
-            return Ok(None);
         }
-        let mut load = |info: Option<gltf::texture::Info>| -> Result<Option<TextureRef>> {
-            Ok(info
-                .map(|i| self.texture_ref(&i, scene))
-                .transpose()?
-                .flatten())
-        };
-        let base_color = load(base)?;
-        let metallic_roughness = load(mr)?;
-        let normal = match normal {
-            Some(n) => self.normal_map(&n, scene)?,
-            None => None,
-        };
-        if base_color.is_none() && metallic_roughness.is_none() && normal.is_none() {
-            return Ok(None);
+        if let Some(n) = normal {
+            maps.normal = self.normal_map(&n, scene)?;
         }
-        Ok(Some(MaterialMaps {
-            factors,
-            base_color,
-            metallic_roughness,
-            normal,
-        }))
+        let any = maps.refs().next().is_some();
+        Ok(any.then_some(maps))
     }
 
     /// The scene texture of glTF texture `t`, loaded on first use; `None`
@@ -427,12 +425,15 @@ pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
             }
         }
         let pbr = &m.pbr_metallic_roughness;
+        let specular = m.extensions.as_ref().and_then(|e| e.specular.as_ref());
         for info in [
             &pbr.base_color_texture,
             &pbr.metallic_roughness_texture,
             &m.emissive_texture,
         ]
         .into_iter()
+        .chain(specular.map(|s| &s.specular_texture))
+        .chain(specular.map(|s| &s.specular_color_texture))
         .flatten()
         {
             check_info(root, &name, info)?;

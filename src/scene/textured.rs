@@ -13,7 +13,9 @@
 //!
 //! As glTF says (§3.9.2): base colour = `baseColorFactor * texel` (the
 //! texel sRGB-decoded), metalness = `metallicFactor * texel.b`, roughness =
-//! `roughnessFactor * texel.g` (linear). Texture alpha does not shade: with
+//! `roughnessFactor * texel.g` (linear); with `KHR_materials_specular`,
+//! `specularFactor * texel.a` (linear) and `specularColorFactor * texel`
+//! (sRGB-decoded). The base colour texture's alpha does not shade: with
 //! `alphaMode: MASK` it cuts holes ([`super::alpha`]), where no ray stops.
 //!
 //! A point scatters in its material's class: the textures of a mirror or of
@@ -24,7 +26,7 @@
 use super::normal_map::NormalMap;
 use super::texture::{Encoding, Texture, TextureRef};
 use super::Scene;
-use crate::brdf::{from_gltf_material, Brdf, GltfMaterial, Lambert};
+use crate::brdf::{from_gltf_material, Brdf, GltfMaterial, GltfSpecular, Lambert};
 use crate::error::{Error, Result};
 use crate::raycast::Hit;
 use glam::{Vec2, Vec3, Vec4};
@@ -46,24 +48,79 @@ pub struct MaterialMaps {
     pub metallic_roughness: Option<TextureRef>,
     /// `normalTexture` (linear; [`super::normal_map`]).
     pub normal: Option<NormalMap>,
+    /// `KHR_materials_specular.specularTexture` (linear; the strength in
+    /// alpha).
+    pub specular: Option<TextureRef>,
+    /// `KHR_materials_specular.specularColorTexture` (sRGB).
+    pub specular_color: Option<TextureRef>,
+}
+
+/// The decoded texels a point reads, `ONE` for a texture the material lacks.
+struct Texels {
+    base: Vec4,
+    metallic_roughness: Vec4,
+    specular: Vec4,
+    specular_color: Vec4,
 }
 
 impl MaterialMaps {
-    fn refs(&self) -> impl Iterator<Item = &TextureRef> {
-        let normal = self.normal.as_ref().map(|n| &n.texture);
-        self.base_color
-            .iter()
-            .chain(&self.metallic_roughness)
-            .chain(normal)
+    /// Factors `factors` with no texture yet.
+    pub fn new(factors: GltfMaterial) -> Self {
+        MaterialMaps {
+            factors,
+            base_color: None,
+            metallic_roughness: None,
+            normal: None,
+            specular: None,
+            specular_color: None,
+        }
     }
 
-    /// The factors at texels `base` (decoded RGBA) and `mr`.
-    fn at(&self, base: Vec4, mr: Vec4) -> GltfMaterial {
+    pub(super) fn refs(&self) -> impl Iterator<Item = &TextureRef> {
+        let normal = self.normal.as_ref().map(|n| &n.texture);
+        self.shaping().flatten().chain(normal)
+    }
+
+    /// The textures that change the BRDF (all but the normal texture), each
+    /// with its encoding.
+    fn shaping(&self) -> impl Iterator<Item = Option<&TextureRef>> {
+        [
+            self.base_color.as_ref(),
+            self.metallic_roughness.as_ref(),
+            self.specular.as_ref(),
+            self.specular_color.as_ref(),
+        ]
+        .into_iter()
+    }
+
+    /// Whether any texture changes the BRDF.
+    fn shapes_brdf(&self) -> bool {
+        self.shaping().any(|r| r.is_some())
+    }
+
+    /// The texels `read` gives for each texture (`ONE` for a missing one).
+    fn texels(&self, read: impl Fn(&TextureRef, Encoding) -> Vec4) -> Texels {
+        let at = |r: &Option<TextureRef>, e| r.as_ref().map_or(Vec4::ONE, |r| read(r, e));
+        Texels {
+            base: at(&self.base_color, Encoding::Srgb),
+            metallic_roughness: at(&self.metallic_roughness, Encoding::Linear),
+            specular: at(&self.specular, Encoding::Linear),
+            specular_color: at(&self.specular_color, Encoding::Srgb),
+        }
+    }
+
+    /// The factors at texels `t`.
+    fn at(&self, t: &Texels) -> GltfMaterial {
+        let f = &self.factors;
         GltfMaterial {
-            base_color: self.factors.base_color * base.truncate(),
-            metallic: self.factors.metallic * mr.z,
-            roughness: self.factors.roughness * mr.y,
-            ..self.factors
+            base_color: f.base_color * t.base.truncate(),
+            metallic: f.metallic * t.metallic_roughness.z,
+            roughness: f.roughness * t.metallic_roughness.y,
+            specular: f.specular.map(|s| GltfSpecular {
+                factor: s.factor * t.specular.w,
+                color: s.color * t.specular_color.truncate(),
+            }),
+            ..*f
         }
     }
 }
@@ -122,14 +179,9 @@ impl Scene {
                 r.texture
             )));
         }
-        let mean =
-            |r: &Option<TextureRef>, e| r.map_or(Vec4::ONE, |r| self.textures[r.texture].mean(e));
-        let at_mean = maps.at(
-            mean(&maps.base_color, Encoding::Srgb),
-            mean(&maps.metallic_roughness, Encoding::Linear),
-        );
+        let at_mean = maps.at(&maps.texels(|r, e| self.textures[r.texture].mean(e)));
         // A normal texture alone leaves the BRDF (a mirror's or glass's too).
-        if maps.base_color.is_some() || maps.metallic_roughness.is_some() {
+        if maps.shapes_brdf() {
             let brdf = from_gltf_material(&at_mean)
                 .map_err(|e| Error::InvalidScene(format!("material `{name}`: {e}")))?;
             self.materials[material].brdf = brdf;
@@ -176,18 +228,20 @@ impl Scene {
             return *own;
         }
         let colour = self.vertex_color(hit);
-        let untextured = maps.base_color.is_none() && maps.metallic_roughness.is_none();
-        if untextured && colour.is_none() {
+        if !maps.shapes_brdf() && colour.is_none() {
             return *own;
         }
-        let read = |r: &Option<TextureRef>, e| {
-            r.as_ref()
-                .and_then(|r| Some(self.textures[r.texture].sample(self.texcoord(hit, r)?, e)))
-                .unwrap_or(Vec4::ONE)
-        };
+        let mut texels = maps.texels(|r, e| match self.texcoord(hit, r) {
+            Some(uv) => self.textures[r.texture].sample(uv, e),
+            None => Vec4::ONE,
+        });
         // glTF's COLOR_0 multiplies the base colour texel.
-        let base = read(&maps.base_color, Encoding::Srgb) * colour.unwrap_or(Vec3::ONE).extend(1.0);
-        if maps.metallic_roughness.is_none() {
+        texels.base *= colour.unwrap_or(Vec3::ONE).extend(1.0);
+        let base = texels.base;
+        let colour_only = maps.metallic_roughness.is_none()
+            && maps.specular.is_none()
+            && maps.specular_color.is_none();
+        if colour_only {
             // Only the colour varies, and it does not change which model
             // the factors map to (module docs): the material's model with
             // the texel's colour.
@@ -202,7 +256,7 @@ impl Scene {
                 _ => {}
             }
         }
-        let mut at = maps.at(base, read(&maps.metallic_roughness, Encoding::Linear));
+        let mut at = maps.at(&texels);
         // A polished texel of a rough material stays a (sharp) lobe, not a
         // mirror.
         at.roughness = at.roughness.max(SMOOTHEST_TEXEL);

@@ -74,9 +74,6 @@ fn add_mapped_floor(s: &mut Scene, half: f32, texel: [u8; 4], scale: f32) -> usi
     s.set_texcoords(mesh, 0, uv.iter().map(|&a| a.into()).collect())
         .unwrap();
     let maps = MaterialMaps {
-        factors: GltfMaterial::new(Vec3::splat(ALBEDO), 0.0, 1.0),
-        base_color: None,
-        metallic_roughness: None,
         normal: Some(NormalMap {
             texture: TextureRef {
                 texture,
@@ -85,6 +82,7 @@ fn add_mapped_floor(s: &mut Scene, half: f32, texel: [u8; 4], scale: f32) -> usi
             },
             scale,
         }),
+        ..MaterialMaps::new(GltfMaterial::new(Vec3::splat(ALBEDO), 0.0, 1.0))
     };
     s.set_material_maps(m, maps).unwrap();
     s.generate_tangents(mesh, 0).unwrap();
