@@ -468,6 +468,53 @@ mod tests {
     }
 
     #[test]
+    fn specular_scales_the_dielectric_and_spares_the_metal_and_the_glass() {
+        let c = Vec3::new(0.8, 0.5, 0.2);
+        let spec = |factor, color| GltfSpecular { factor, color };
+        let m = |metallic, roughness, s, transmission| GltfMaterial {
+            ior: Some(2.0),
+            specular: Some(s),
+            transmission,
+            ..GltfMaterial::new(c, metallic, roughness)
+        };
+        // IOR 2: f0 = 1/9; min(f0 c, 1) s per channel, f90 = s.
+        let s = spec(0.5, Vec3::new(3.0, 9.0, 18.0));
+        let Ok(Brdf::GltfPbr(b)) = from_gltf_material(&m(0.0, 0.5, s, None)) else {
+            panic!("a glossy dielectric")
+        };
+        let want = Vec3::new(1.0 / 3.0, 1.0, 1.0) * 0.5;
+        assert!((b.dielectric_f0() - want).abs().max_element() < 1e-6);
+        assert_eq!(b.dielectric_f90(), 0.5);
+        // A full metal's lobe is its base colour's, f90 = 1.
+        let Ok(Brdf::GltfPbr(metal)) = from_gltf_material(&m(1.0, 0.5, s, None)) else {
+            panic!("a rough metal")
+        };
+        assert_eq!((metal.f0(), metal.f90()), (c, 1.0));
+        // Glass keeps its IOR's Fresnel; the opaque part of a mix takes it.
+        let glass = gltf_lobes(&m(0.0, 0.5, s, Some(1.0))).unwrap();
+        assert!(matches!(glass.surface, Brdf::RoughDielectric(d) if d.ior() == 2.0));
+        let mix = gltf_lobes(&m(0.0, 0.5, s, Some(0.5))).unwrap();
+        let Brdf::GltfPbr(opaque) = mix.surface else {
+            panic!("the opaque part")
+        };
+        assert_eq!(opaque.dielectric_f0(), b.dielectric_f0());
+        // The defaults are the absent extension, bit for bit.
+        let d = m(0.0, 0.5, GltfSpecular::default(), None);
+        let none = GltfMaterial { specular: None, ..d };
+        assert_eq!(from_gltf_material(&d).unwrap(), from_gltf_material(&none).unwrap());
+        // Out of range: named.
+        for bad in [
+            spec(1.5, Vec3::ONE),
+            spec(f32::NAN, Vec3::ONE),
+            spec(1.0, Vec3::new(1.0, -0.1, 1.0)),
+            spec(1.0, Vec3::new(1.0, f32::INFINITY, 1.0)),
+        ] {
+            let e = message(&m(0.0, 0.5, bad, None));
+            assert!(e.contains("specular"), "{bad:?}: {e}");
+        }
+    }
+
+    #[test]
     fn ior_zero_is_a_fresnel_of_one_and_nothing_transmits() {
         for m in [
             GltfMaterial {

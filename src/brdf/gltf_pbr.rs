@@ -436,11 +436,17 @@ mod tests {
         // The case the specification's sample code gets wrong: a white,
         // smooth dielectric at grazing incidence (1.9 there).
         let mut worst = 0.0f32;
-        for f0_d in [0.0f32, 0.04, 0.17, 0.5, 1.0] {
+        let coloured = Vec3::new(0.5, 0.02, 1.0);
+        let dielectrics = [0.0f32, 0.04, 0.17, 0.5, 1.0]
+            .map(|f| (Vec3::splat(f), 1.0))
+            .into_iter()
+            .chain([(coloured, 1.0), (coloured, 0.5), (Vec3::splat(0.3), 0.0)]);
+        for (f0_d, f90_d) in dielectrics {
             for metallic in [0.0f32, 0.5, 1.0] {
                 for k in 0..=10 {
                     let r = 0.032 + (1.0 - 0.032) * k as f32 / 10.0;
-                    let b = GltfPbr::new(Vec3::ONE, metallic, r * r, f0_d).unwrap();
+                    let b = GltfPbr::with_specular(Vec3::ONE, metallic, r * r, f0_d, f90_d)
+                        .unwrap();
                     for j in 0..=25 {
                         let c = (j as f32 / 25.0).max(1e-3);
                         let a = b.albedo(spherical_direction(c, 0.0));
@@ -450,6 +456,47 @@ mod tests {
             }
         }
         assert!(worst <= 1.0 + 2e-3, "largest albedo {worst}");
+    }
+
+    #[test]
+    fn a_coloured_f0_and_an_f90_below_one_are_the_extensions_fresnel() {
+        // KHR_materials_specular's dielectric layer: specular_brdf times
+        // f0 + (f90 - f0) (1 - |v.h|)^5, per channel; the metal keeps f90 = 1.
+        let (f0, f90) = (Vec3::new(0.1, 0.02, 0.3), 0.6f32);
+        let base = Vec3::new(0.7, 0.5, 0.9);
+        for roughness in [0.1f32, 0.5, 0.9] {
+            let b = GltfPbr::with_specular(base, 0.25, roughness * roughness, f0, f90).unwrap();
+            assert!((b.f90() - (0.6 + 0.4 * 0.25)).abs() < 1e-6);
+            for (ci, pi, co, po) in DIRS {
+                let (l, v) = (spherical_direction(ci, pi), spherical_direction(co, po));
+                let (_, layer) = spec_reference([0.0; 3], roughness.into(), l, v);
+                // The reference's dielectric layer is specular_brdf (0.04 + 0.96 w).
+                let h = (l + v).normalize();
+                let w = f64::from((1.0 - v.dot(h).abs()).powi(5));
+                let specular_brdf = layer / (0.04 + 0.96 * w);
+                let f0_mix = f0.lerp(base, 0.25).as_dvec3();
+                let f90_mix = f64::from(b.f90());
+                let got = b.specular(l, v);
+                for (g, f) in got.to_array().into_iter().zip(f0_mix.to_array()) {
+                    let want = specular_brdf * (f + (f90_mix - f) * w);
+                    assert_close(g, want, &format!("r={roughness} cos {ci} {co}"));
+                }
+                // Reciprocal, base included.
+                let (a, r) = (b.eval(l, v), b.eval(v, l));
+                assert!((a - r).abs().max_element() <= 1e-5 * a.max_element().max(1.0));
+            }
+        }
+    }
+
+    #[test]
+    fn no_dielectric_reflection_leaves_a_lambertian_base() {
+        // f0_d = f90_d = 0 (specularFactor 0): the base takes all the light.
+        let b = GltfPbr::with_specular(Vec3::splat(0.6), 0.0, 0.3, Vec3::ZERO, 0.0).unwrap();
+        for (ci, pi, co, po) in DIRS {
+            let (l, v) = (spherical_direction(ci, pi), spherical_direction(co, po));
+            let want = 0.6 * std::f32::consts::FRAC_1_PI;
+            assert!((b.eval(l, v) - Vec3::splat(want)).abs().max_element() < 1e-7);
+        }
     }
 
     #[test]

@@ -330,19 +330,13 @@ pub(super) fn load_texcoords(
 ) -> Result<()> {
     let material = scene.meshes[mesh].material;
     let maps = scene.material_maps(material);
-    let refs = maps.map_or([None, None, None], |m| {
-        [
-            m.base_color,
-            m.metallic_roughness,
-            m.normal.map(|n| n.texture),
-        ]
-    });
-    let emissive = scene.emission_texture(material).copied();
-    let mask = scene.alpha_mask(material).and_then(|m| m.texture);
-    let mut sets: Vec<usize> = refs
-        .iter()
-        .chain([&emissive, &mask])
-        .flatten()
+    let emissive = scene.emission_texture(material);
+    let mask = scene.alpha_mask(material).and_then(|m| m.texture.as_ref());
+    let mut sets: Vec<usize> = maps
+        .into_iter()
+        .flat_map(|m| m.refs())
+        .chain(emissive)
+        .chain(mask)
         .map(|r| r.tex_coord)
         .collect();
     sets.sort_unstable();

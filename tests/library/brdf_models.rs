@@ -66,6 +66,18 @@ fn glossy_models() -> Vec<(&'static str, Brdf)> {
                 .into(),
         ),
         (
+            "gltf specular coloured r=0.45",
+            GltfPbr::with_specular(
+                Vec3::new(0.7, 0.5, 0.9),
+                0.2,
+                0.2,
+                Vec3::new(0.1, 0.02, 0.3),
+                0.6,
+            )
+            .unwrap()
+            .into(),
+        ),
+        (
             "gltf metal r=0.4",
             GltfPbr::new(Vec3::new(0.95, 0.64, 0.54), 1.0, 0.16, 0.04)
                 .unwrap()

@@ -171,7 +171,7 @@ fn the_texture_transform_moves_the_lookup() {
 
 /// Power the floor reflects onto the ceiling (photons stored there at
 /// depth 1), and its standard error from the photons' own spread.
-fn reflected_up(scene: &Scene, seed: u64) -> (f64, f64) {
+pub(crate) fn reflected_up(scene: &Scene, seed: u64) -> (f64, f64) {
     let device = Device::new().unwrap();
     let tracer = Tracer::new(Arc::new(scene.clone().commit(&device).unwrap()));
     let mut cfg = TraceConfig::new(Mode::Classic, Budget::NMax(300_000));

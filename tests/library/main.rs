@@ -39,6 +39,7 @@ mod gltf_glass;
 mod gltf_meshopt;
 mod gltf_normal_texture;
 mod gltf_quantized;
+mod gltf_specular;
 mod gltf_textures;
 mod gltf_validator;
 mod hostile;

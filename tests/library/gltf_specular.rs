@@ -1,0 +1,259 @@
+//! `KHR_materials_specular`: the dielectric's Fresnel term coloured and
+//! scaled as the extension defines it, its textures read at each hit, the
+//! factors checked by name, and photons reflected as the model says.
+
+use adaptive_pm::brdf::{Brdf, GltfPbr};
+use adaptive_pm::embree::Device;
+use adaptive_pm::raycast::Ray;
+use adaptive_pm::scene::Scene;
+use glam::Vec3;
+use serde_json::{json, Value};
+
+use crate::common;
+use crate::gltf_doc::{square, Doc};
+use crate::gltf_textures::reflected_up;
+
+const EXT: &str = "KHR_materials_specular";
+
+/// A 4 x 4 floor of material `floor` facing up at y = 0, texture
+/// coordinates (0, 0) to (1, 1) across it; a lamp facing down at y = 1; a
+/// black ceiling at y = 1.5 that records what the floor reflects up.
+fn floor_scene(floor: Value) -> Doc {
+    let mut doc = Doc::default();
+    doc.extensions_used.push(EXT);
+    let floor_m = doc.material(floor);
+    let lamp = doc.material(json!({"name": "lamp", "emissiveFactor": [1.0, 1.0, 1.0],
+        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0}}));
+    let black = doc.material(json!({"name": "black",
+        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0}}));
+    let (p, i) = square(2.0, true);
+    let f = doc.mesh(&p, &i, 4, Some(floor_m));
+    doc.texcoords(f, &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
+    doc.node(json!({ "mesh": f }));
+    let (p, i) = square(0.5, false);
+    let l = doc.mesh(&p, &i, 4, Some(lamp));
+    doc.node(json!({"mesh": l, "translation": [0.0, 1.0, 0.0]}));
+    let (p, i) = square(2.0, false);
+    let c = doc.mesh(&p, &i, 4, Some(black));
+    doc.node(json!({"mesh": c, "translation": [0.0, 1.5, 0.0]}));
+    doc
+}
+
+/// A grey dielectric of `roughness` with the extension object `specular`
+/// (none when `Value::Null`).
+fn floor(base: f32, roughness: f32, specular: Value) -> Value {
+    let mut m = json!({"name": "floor", "pbrMetallicRoughness":
+        {"baseColorFactor": [base, base, base, 1.0], "metallicFactor": 0.0,
+         "roughnessFactor": roughness}});
+    if !specular.is_null() {
+        m["extensions"] = json!({ EXT: specular });
+    }
+    m
+}
+
+fn load(doc: &Doc) -> Scene {
+    let dir = tempfile::tempdir().unwrap();
+    Scene::load(doc.write(dir.path())).unwrap()
+}
+
+fn load_err(doc: &Doc) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    Scene::load(doc.write(dir.path())).unwrap_err().to_string()
+}
+
+/// The BRDF at the floor point straight below (x, z).
+fn brdf_at(scene: &Scene, x: f32, z: f32) -> Brdf {
+    let device = Device::new().unwrap();
+    let committed = scene.clone().commit(&device).unwrap();
+    let ray = Ray::new(Vec3::new(x, 0.5, z), Vec3::NEG_Y);
+    let hit = committed.caster().intersect(&ray).expect("the floor");
+    scene.surface_brdf(&hit).unwrap()
+}
+
+fn pbr(b: Brdf) -> GltfPbr {
+    match b {
+        Brdf::GltfPbr(g) => g,
+        other => panic!("a rough dielectric is the glTF BRDF, got {other:?}"),
+    }
+}
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).abs().max_element() < 1e-6
+}
+
+#[test]
+fn the_factors_colour_and_scale_the_dielectrics_fresnel_term() {
+    // f0_d = min(0.04 c, 1) s and f90_d = s.
+    let spec = json!({"specularFactor": 0.5, "specularColorFactor": [2.0, 1.0, 0.25]});
+    let scene = load(&floor_scene(floor(0.5, 0.5, spec)));
+    let g = pbr(scene.materials()[0].brdf);
+    assert!(
+        close(g.dielectric_f0(), Vec3::new(0.04, 0.02, 0.005)),
+        "{}",
+        g.dielectric_f0()
+    );
+    assert_eq!(g.dielectric_f90(), 0.5);
+    // A colour above 1/f0 reaches the clamp: f0_d = s.
+    let spec = json!({"specularFactor": 0.7, "specularColorFactor": [30.0, 30.0, 30.0]});
+    let g = pbr(load(&floor_scene(floor(0.5, 0.5, spec))).materials()[0].brdf);
+    assert!(close(g.dielectric_f0(), Vec3::splat(0.7)));
+    // The extension at its defaults is the material without it, bit for bit
+    // (Blender writes it so on glass).
+    let defaults = json!({"specularFactor": 1.0, "specularColorFactor": [1.0, 1.0, 1.0]});
+    let with = load(&floor_scene(floor(0.5, 0.5, defaults)));
+    let without = load(&floor_scene(floor(0.5, 0.5, Value::Null)));
+    assert_eq!(with.materials()[0].brdf, without.materials()[0].brdf);
+    let w = with.warnings().join("\n");
+    assert!(!w.contains(EXT), "the extension is modelled: {w}");
+}
+
+#[test]
+fn a_specular_factor_of_zero_leaves_the_base_alone() {
+    // No dielectric reflection: a rough floor is Lambert, and a glossy one
+    // reflects its base colour at every angle.
+    let off = json!({"specularFactor": 0.0});
+    let rough = load(&floor_scene(floor(0.6, 1.0, off.clone())));
+    assert!(
+        matches!(rough.materials()[0].brdf, Brdf::Lambert(l) if close(l.albedo, Vec3::splat(0.6)))
+    );
+    let glossy = pbr(load(&floor_scene(floor(0.6, 0.3, off))).materials()[0].brdf);
+    for cos in [1.0f32, 0.5, 0.1] {
+        let wi = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
+        assert!(close(glossy.albedo(wi), Vec3::splat(0.6)), "cos {cos}");
+    }
+}
+
+#[test]
+fn photons_reflect_by_the_specular_factors() {
+    // A glossy floor with its specular reflection off reflects exactly like
+    // a Lambert floor of its base colour (its albedo is the base colour at
+    // every angle), and differently from the same floor without the
+    // extension, which loses light into its sheen's masking and its base's
+    // coupling.
+    let off = load(&floor_scene(floor(0.6, 0.3, json!({"specularFactor": 0.0}))));
+    let lambert = load(&floor_scene(floor(0.6, 1.0, Value::Null)));
+    assert!(matches!(lambert.materials()[0].brdf, Brdf::Lambert(_)));
+    let plain = load(&floor_scene(floor(0.6, 0.3, Value::Null)));
+    let seed = common::seed(77);
+    let (o, o_se) = reflected_up(&off, seed);
+    let (l, l_se) = reflected_up(&lambert, seed + 1);
+    let (p, p_se) = reflected_up(&plain, seed + 2);
+    eprintln!("reflected up: specular off {o} +- {o_se}, Lambert {l} +- {l_se}, plain {p} +- {p_se}");
+    let se = o_se.hypot(l_se);
+    common::assert_within_noise("specular off vs Lambert", o - l, se, 4.0 * se);
+    let se = o_se.hypot(p_se);
+    assert!(
+        (o - p).abs() > 4.0 * se,
+        "the extension changes what the floor reflects: {o} vs {p} (se {se})"
+    );
+}
+
+/// An 8-bit RGBA PNG of `w x h` pixels.
+fn png_rgba(w: u32, h: u32, rgba: &[[u8; 4]]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, w, h);
+    enc.set_color(png::ColorType::Rgba);
+    enc.set_depth(png::BitDepth::Eight);
+    let data: Vec<u8> = rgba.iter().flatten().copied().collect();
+    enc.write_header().unwrap().write_image_data(&data).unwrap();
+    out
+}
+
+#[test]
+fn the_textures_multiply_the_factors_where_a_hit_lands() {
+    const NEAREST_CLAMP: &str = r#"{"magFilter": 9728, "wrapS": 33071, "wrapT": 33071}"#;
+    let sampler: Value = serde_json::from_str(NEAREST_CLAMP).unwrap();
+    let mut doc = floor_scene(floor(0.5, 0.5, Value::Null));
+    // Strength in alpha (linear): 255 on the left half, 51 (0.2) on the
+    // right; colour (sRGB): 188 (linear 0.5029) in red on the left, white
+    // on the right.
+    let strength = doc.texture(
+        &png_rgba(2, 1, &[[0, 0, 0, 255], [0, 0, 0, 51]]),
+        sampler.clone(),
+    );
+    let colour = doc.texture(
+        &png_rgba(2, 1, &[[188, 255, 255, 255], [255, 255, 255, 255]]),
+        sampler,
+    );
+    doc.materials[0]["extensions"] = json!({EXT: {
+        "specularFactor": 0.5, "specularTexture": {"index": strength},
+        "specularColorFactor": [2.0, 2.0, 2.0], "specularColorTexture": {"index": colour}}});
+    let scene = load(&doc);
+    let srgb_188 = 0.502_886_5;
+    let left = pbr(brdf_at(&scene, -1.0, 0.0));
+    let want = Vec3::new(0.08 * srgb_188, 0.08, 0.08) * 0.5;
+    assert!(
+        (left.dielectric_f0() - want).abs().max_element() < 1e-5,
+        "left: {} vs {want}",
+        left.dielectric_f0()
+    );
+    assert_eq!(left.dielectric_f90(), 0.5);
+    let right = pbr(brdf_at(&scene, 1.0, 0.0));
+    let s = 0.5 * 51.0 / 255.0;
+    assert!(close(right.dielectric_f0(), Vec3::splat(0.08 * s)));
+    assert!((right.dielectric_f90() - s).abs() < 1e-6);
+    // The material's own model, for the photon counts, is at the mean texels.
+    let mean = pbr(scene.materials()[0].brdf);
+    let s_mean = 0.5 * (1.0 + 0.2) / 2.0;
+    assert!((mean.dielectric_f90() - s_mean).abs() < 1e-6);
+}
+
+#[test]
+fn bad_factors_are_refused_by_name_and_glass_says_what_it_ignores() {
+    let doc = floor_scene(floor(0.5, 0.5, json!({"specularFactor": 1.5})));
+    let e = load_err(&doc);
+    assert!(e.contains("floor") && e.contains("specularFactor"), "{e}");
+    let doc = floor_scene(floor(
+        0.5,
+        0.5,
+        json!({"specularColorFactor": [1.0, -0.5, 1.0]}),
+    ));
+    let e = load_err(&doc);
+    assert!(e.contains("floor") && e.contains("specularColorFactor"), "{e}");
+    // Glass keeps its IOR's Fresnel term: a specular change is a warning.
+    let glass = |spec: Value| {
+        let mut m = floor(1.0, 0.0, spec);
+        m["extensions"]["KHR_materials_transmission"] = json!({"transmissionFactor": 1.0});
+        let mut doc = floor_scene(m);
+        doc.extensions_used.push("KHR_materials_transmission");
+        load(&doc).warnings().join("\n")
+    };
+    let w = glass(json!({"specularFactor": 0.3}));
+    assert!(w.contains(EXT) && w.contains("glass"), "{w}");
+    let w = glass(json!({"specularColorFactor": [1.0, 1.0, 1.0]}));
+    assert!(!w.contains(EXT), "{w}");
+}
+
+/// `assets/blender_specular.glb`, written by Blender 3.4's exporter
+/// (`tools/blender_specular.py`): Principled Specular `s` and Specular Tint
+/// `t` on a base colour `b` become the dielectric reflectance Blender itself
+/// uses, `0.08 s ((1 - t) + t b / lum(b))`, whatever the IOR the exporter
+/// divides by and the extension multiplies back.
+#[test]
+fn blenders_specular_reaches_the_model_as_blender_means_it() {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/blender_specular.glb");
+    let scene = Scene::load(&file).unwrap();
+    let material = |name: &str| {
+        let m = scene.materials().iter().find(|m| m.name == name);
+        m.unwrap_or_else(|| panic!("no material {name}")).brdf
+    };
+    let blender_f0 = |s: f32, t: f32, b: Vec3| {
+        let lum = 0.3 * b.x + 0.6 * b.y + 0.1 * b.z;
+        0.08 * s * (Vec3::splat(1.0 - t) + t * b / lum)
+    };
+    let cases = [
+        ("floor", blender_f0(0.25, 0.0, Vec3::splat(0.6))),
+        ("tinted", blender_f0(1.0, 0.5, Vec3::new(0.8, 0.3, 0.1))),
+        ("plain", Vec3::splat(0.04)),
+    ];
+    for (name, want) in cases {
+        let g = pbr(material(name));
+        let got = g.dielectric_f0();
+        assert!((got - want).abs().max_element() < 1e-6, "{name}: {got} vs {want}");
+        assert_eq!(g.dielectric_f90(), 1.0, "{name}");
+    }
+    // Specular 0 is a black specular colour: a rough base alone, Lambert.
+    assert!(matches!(material("matte"), Brdf::Lambert(l) if close(l.albedo, Vec3::splat(0.5))));
+    let w = scene.warnings().join("\n");
+    assert!(!w.contains(EXT), "{w}");
+}

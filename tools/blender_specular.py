@@ -1,0 +1,98 @@
+"""Builds a scene whose materials set Principled BSDF's Specular and Specular
+Tint, and exports it with Blender's own glTF exporter: assets/blender_specular.glb,
+a file written by a real exporter with KHR_materials_specular. Blender is needed
+only to regenerate the file, never by CI or the tests. It reuses
+tools/blender_scene.py's helpers (same Blender, same exporter settings).
+
+Produced on Debian bookworm with Blender 3.4.1 (Debian package 3.4.1+dfsg-2,
+`apt-get install --no-install-recommends blender python3-numpy`), run from the
+repository root:
+
+    blender -b --factory-startup --python tools/blender_specular.py -- --out assets/blender_specular.glb
+
+Blender 3.4's exporter writes Specular `s` and Specular Tint `t` on a base
+colour `b` (transmission 0) as `specularColorFactor = 0.08 s k / f0(ior)`,
+`k = (1 - t) + t b / lum(b)` (lum: 0.3, 0.6, 0.1), so that the extension's
+dielectric `f0 = min(f0(ior) specularColorFactor, 1)` is Blender's `0.08 s k`
+whatever the IOR; at Specular 0.5 and Tint 0 it writes no extension.
+
+The scene (Blender is Z-up; the exporter writes glTF's Y-up), in metres:
+- floor: a 3 m x 3 m plane at z = 0, grey 0.6, roughness 0.5, Specular 0.25;
+- tinted: a 1 m x 1 m plane 0.5 m up, orange (0.8, 0.3, 0.1), roughness 0.4,
+  Specular 1.0, Specular Tint 0.5, IOR 1.45;
+- matte: a 1 m x 1 m plane 0.3 m up, grey 0.5, roughness 1, Specular 0 (the
+  exporter writes a black specularColorFactor: no reflection at all);
+- plain: a 1 m x 1 m plane 0.7 m up, roughness 0.5, Blender's defaults
+  (Specular 0.5, no extension);
+- a light panel: a 0.6 m x 0.6 m plane 2 m up, face turned down, a bare
+  Emission shader of strength 20;
+- a perspective camera at a 3/4 view from 2.2 m high.
+"""
+import math
+import os
+import sys
+
+import bpy
+from mathutils import Vector
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import blender_scene as base  # noqa: E402
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    if len(argv) != 2 or argv[0] != "--out":
+        raise SystemExit("blender_specular.py: use -- --out FILE.glb")
+    return argv[1]
+
+
+def plane(name, size, material, location, rotation=(0.0, 0.0, 0.0)):
+    mesh = base.primitive(bpy.ops.mesh.primitive_plane_add, size=size)
+    mesh.name = name
+    mesh.materials.append(material)
+    obj = base.mesh_object(name, mesh)
+    obj.location = location
+    obj.rotation_euler = rotation
+    return obj
+
+
+def specular(name, colour, roughness, spec, tint=0.0, ior=1.5):
+    mat, bsdf = base.principled(name, colour, roughness=roughness, ior=ior)
+    bsdf.inputs["Specular"].default_value = spec
+    bsdf.inputs["Specular Tint"].default_value = tint
+    return mat
+
+
+def build():
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = 320, 240
+    scene.render.resolution_percentage = 100
+
+    plane("floor", 3.0, specular("floor", (0.6, 0.6, 0.6), 0.5, 0.25), (0.0, 0.0, 0.0))
+    tinted = specular("tinted", (0.8, 0.3, 0.1), 0.4, 1.0, tint=0.5, ior=1.45)
+    plane("tinted", 1.0, tinted, (-0.6, 0.0, 0.5))
+    plane("matte", 1.0, specular("matte", (0.5, 0.5, 0.5), 1.0, 0.0), (0.6, 0.0, 0.3))
+    plane("plain", 1.0, specular("plain", (0.5, 0.5, 0.5), 0.5, 0.5), (0.0, 0.8, 0.7))
+
+    panel = base.emission("panel_emission", (1.0, 1.0, 1.0), 20.0)
+    plane("panel", 0.6, panel, (0.2, 0.1, 2.0), (math.pi, 0.0, 0.0))
+
+    cam = bpy.data.cameras.new("camera")
+    cam.lens, cam.sensor_width = 35.0, 36.0
+    cam_obj = base.link(bpy.data.objects.new("camera", cam))
+    cam_obj.location = Vector((2.2, -2.0, 2.2))
+    target = Vector((0.0, 0.0, 0.3))
+    cam_obj.rotation_euler = (target - cam_obj.location).to_track_quat("-Z", "Y").to_euler()
+    scene.camera = cam_obj
+    bpy.context.view_layer.update()
+
+
+def main():
+    out = parse_args()
+    base.clear_scene()
+    build()
+    base.export(out)
+    print(f"blender_specular.py: wrote {out}")
+
+
+main()
