@@ -185,7 +185,10 @@ impl GltfSpecular {
             // The bits of the model without the extension.
             return (Vec3::splat(f0), 1.0);
         }
-        ((Vec3::splat(f0) * self.color).min(Vec3::ONE) * self.factor, self.factor)
+        (
+            (Vec3::splat(f0) * self.color).min(Vec3::ONE) * self.factor,
+            self.factor,
+        )
     }
 }
 
@@ -342,7 +345,11 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
         ));
     }
     let volume = m.volume.unwrap_or_default().check()?;
-    let (f0_d, f90_d) = m.specular.unwrap_or_default().check()?.fresnel(dielectric_f0(ior));
+    let (f0_d, f90_d) = m
+        .specular
+        .unwrap_or_default()
+        .check()?
+        .fresnel(dielectric_f0(ior));
     let (metallic, roughness) = (m.metallic, m.roughness);
     let alone = |surface| {
         Ok(GltfLobes {
@@ -500,8 +507,14 @@ mod tests {
         assert_eq!(opaque.dielectric_f0(), b.dielectric_f0());
         // The defaults are the absent extension, bit for bit.
         let d = m(0.0, 0.5, GltfSpecular::default(), None);
-        let none = GltfMaterial { specular: None, ..d };
-        assert_eq!(from_gltf_material(&d).unwrap(), from_gltf_material(&none).unwrap());
+        let none = GltfMaterial {
+            specular: None,
+            ..d
+        };
+        assert_eq!(
+            from_gltf_material(&d).unwrap(),
+            from_gltf_material(&none).unwrap()
+        );
         // Out of range: named.
         for bad in [
             spec(1.5, Vec3::ONE),

@@ -78,10 +78,9 @@ pub struct GltfPbr {
     metallic: f32,
     f0_d: Vec3,
     f90_d: f32,
-    // Derived from the above once, as every evaluation needs them.
-    f0: Vec3,
-    f90: f32,
-    kd: Vec3,
+    // Derived from the above once, as every evaluation needs it (the lobe's
+    // `f0`, `f90` and the base's `kd` are a few products, computed where
+    // used: stored, they made `Brdf`, which every hit copies, 80 bytes).
     /// `1 / (pi (1 - E_avg))` per channel, 0 in a channel no light enters
     /// (`E_avg = 1`), and in all when the base has no colour (a metal).
     base_scale: Vec3,
@@ -138,7 +137,13 @@ impl GltfPbr {
         }
         let base_color = check_rgb01("gltf-pbr base colour", base_color)?;
         let f0_d = check_rgb01("gltf-pbr f0_d", f0_d)?;
-        Ok(Self::derive(Ggx { alpha }, base_color, metallic, f0_d, f90_d))
+        Ok(Self::derive(
+            Ggx { alpha },
+            base_color,
+            metallic,
+            f0_d,
+            f90_d,
+        ))
     }
 
     /// The model of checked parameters, its derived terms computed.
@@ -163,10 +168,6 @@ impl GltfPbr {
             metallic,
             f0_d,
             f90_d,
-            f0: f0_d.lerp(base_color, metallic),
-            // Written so that `f90_d = 1` gives 1 exactly, whatever `metallic`.
-            f90: f90_d + (1.0 - f90_d) * metallic,
-            kd,
             base_scale,
         }
     }
@@ -213,23 +214,25 @@ impl GltfPbr {
     /// The specular lobe's Fresnel reflectance at normal incidence,
     /// `mix(f0_d, base_color, metallic)`.
     pub fn f0(&self) -> Vec3 {
-        self.f0
+        self.f0_d.lerp(self.base_color, self.metallic)
     }
 
     /// The specular lobe's Fresnel reflectance at grazing incidence,
     /// `mix(f90_d, 1, metallic)`.
     pub fn f90(&self) -> f32 {
-        self.f90
+        // Written so that `f90_d = 1` gives 1 exactly, whatever `metallic`.
+        self.f90_d + (1.0 - self.f90_d) * self.metallic
     }
 
     /// The diffuse base's colour, `base_color (1 - metallic)`.
     pub fn kd(&self) -> Vec3 {
-        self.kd
+        self.base_color * (1.0 - self.metallic)
     }
 
     /// Schlick's Fresnel of the specular lobe at `|wi.h| = c`, per channel.
     fn fresnel(&self, c: f32) -> Vec3 {
-        self.f0 + (Vec3::splat(self.f90) - self.f0) * schlick_weight(c)
+        let f0 = self.f0();
+        f0 + (Vec3::splat(self.f90()) - f0) * schlick_weight(c)
     }
 
     /// `1 - E_F(mu)` per channel: the share of the light arriving at cosine
@@ -245,7 +248,7 @@ impl GltfPbr {
         if self.base_scale == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        self.kd * (self.entering(cos_i) * self.entering(cos_o) * self.base_scale)
+        self.kd() * (self.entering(cos_i) * self.entering(cos_o) * self.base_scale)
     }
 
     /// The base's albedo `kd (1 - E_F(cos_i))`.
@@ -253,7 +256,7 @@ impl GltfPbr {
         if self.base_scale == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        self.kd * self.entering(cos_i)
+        self.kd() * self.entering(cos_i)
     }
 
     fn p_spec(&self, cos_i: f32) -> f32 {
@@ -338,7 +341,8 @@ impl GltfPbr {
     /// The specular lobe's share of [`Self::albedo`].
     fn albedo_of_specular(&self, wi: Vec3) -> Vec3 {
         let e = self.ggx.lobe_energy(wi);
-        self.f0 * e.shadowed + (Vec3::splat(self.f90) - self.f0) * e.shadowed_schlick
+        let f0 = self.f0();
+        f0 * e.shadowed + (Vec3::splat(self.f90()) - f0) * e.shadowed_schlick
     }
 }
 
@@ -445,8 +449,8 @@ mod tests {
             for metallic in [0.0f32, 0.5, 1.0] {
                 for k in 0..=10 {
                     let r = 0.032 + (1.0 - 0.032) * k as f32 / 10.0;
-                    let b = GltfPbr::with_specular(Vec3::ONE, metallic, r * r, f0_d, f90_d)
-                        .unwrap();
+                    let b =
+                        GltfPbr::with_specular(Vec3::ONE, metallic, r * r, f0_d, f90_d).unwrap();
                     for j in 0..=25 {
                         let c = (j as f32 / 25.0).max(1e-3);
                         let a = b.albedo(spherical_direction(c, 0.0));

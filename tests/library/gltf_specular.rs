@@ -130,7 +130,11 @@ fn photons_reflect_by_the_specular_factors() {
     // every angle), and differently from the same floor without the
     // extension, which loses light into its sheen's masking and its base's
     // coupling.
-    let off = load(&floor_scene(floor(0.6, 0.3, json!({"specularFactor": 0.0}))));
+    let off = load(&floor_scene(floor(
+        0.6,
+        0.3,
+        json!({"specularFactor": 0.0}),
+    )));
     let lambert = load(&floor_scene(floor(0.6, 1.0, Value::Null)));
     assert!(matches!(lambert.materials()[0].brdf, Brdf::Lambert(_)));
     let plain = load(&floor_scene(floor(0.6, 0.3, Value::Null)));
@@ -138,7 +142,9 @@ fn photons_reflect_by_the_specular_factors() {
     let (o, o_se) = reflected_up(&off, seed);
     let (l, l_se) = reflected_up(&lambert, seed + 1);
     let (p, p_se) = reflected_up(&plain, seed + 2);
-    eprintln!("reflected up: specular off {o} +- {o_se}, Lambert {l} +- {l_se}, plain {p} +- {p_se}");
+    eprintln!(
+        "reflected up: specular off {o} +- {o_se}, Lambert {l} +- {l_se}, plain {p} +- {p_se}"
+    );
     let se = o_se.hypot(l_se);
     common::assert_within_noise("specular off vs Lambert", o - l, se, 4.0 * se);
     let se = o_se.hypot(p_se);
@@ -209,7 +215,10 @@ fn bad_factors_are_refused_by_name_and_glass_says_what_it_ignores() {
         json!({"specularColorFactor": [1.0, -0.5, 1.0]}),
     ));
     let e = load_err(&doc);
-    assert!(e.contains("floor") && e.contains("specularColorFactor"), "{e}");
+    assert!(
+        e.contains("floor") && e.contains("specularColorFactor"),
+        "{e}"
+    );
     // Glass keeps its IOR's Fresnel term: a specular change is a warning.
     let glass = |spec: Value| {
         let mut m = floor(1.0, 0.0, spec);
@@ -249,7 +258,10 @@ fn blenders_specular_reaches_the_model_as_blender_means_it() {
     for (name, want) in cases {
         let g = pbr(material(name));
         let got = g.dielectric_f0();
-        assert!((got - want).abs().max_element() < 1e-6, "{name}: {got} vs {want}");
+        assert!(
+            (got - want).abs().max_element() < 1e-6,
+            "{name}: {got} vs {want}"
+        );
         assert_eq!(g.dielectric_f90(), 1.0, "{name}");
     }
     // Specular 0 is a black specular colour: a rough base alone, Lambert.
