@@ -20,7 +20,7 @@ pub struct AnalysisCache {
     estimator: Estimator,
     /// By the exponent's bits (-0.0 folded into 0.0).
     emitters: HashMap<u32, f32>,
-    brdfs: HashMap<(u8, [u32; 9]), Arc<DirectionalityTable>>,
+    brdfs: HashMap<(u8, [u32; crate::brdf::PARAM_WORDS]), Arc<DirectionalityTable>>,
     analyses: usize,
 }
 

@@ -128,6 +128,17 @@ impl Ggx {
     /// normalised) towards GGX's grazing tail; the integrands have no `D`
     /// in them and stay smooth at every alpha. See [`LobeEnergy`].
     pub(crate) fn lobe_energy(&self, wi: Vec3) -> LobeEnergy {
+        self.lobe_energy_weighted(wi, |_| 1.0)
+    }
+
+    /// [`Self::lobe_energy`] with each reflected direction's share of the
+    /// shadowed moments multiplied by `weight(wo)` (what a layer above lets
+    /// out towards `wo`; 1 gives [`Self::lobe_energy`] bit for bit).
+    pub(crate) fn lobe_energy_weighted(
+        &self,
+        wi: Vec3,
+        weight: impl Fn(Vec3) -> f64,
+    ) -> LobeEnergy {
         const N: usize = 32;
         let (mut e1, mut ew, mut w_all, mut total) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
         for a in 0..N {
@@ -146,7 +157,7 @@ impl Ggx {
                 if wo.z <= 0.0 {
                     continue;
                 }
-                let g = f64::from(self.g(wi, wo) / self.g1(wi));
+                let g = f64::from(self.g(wi, wo) / self.g1(wi)) * weight(wo);
                 e1 += w * g;
                 ew += schlick * g;
             }

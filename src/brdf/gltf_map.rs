@@ -1,7 +1,7 @@
 //! From glTF 2.0 materials to this crate's models: the core
-//! metallic-roughness factors and the extensions `KHR_materials_ior`,
-//! `KHR_materials_specular`, `KHR_materials_transmission` and
-//! `KHR_materials_volume`.
+//! metallic-roughness factors and the extensions `KHR_materials_clearcoat`,
+//! `KHR_materials_ior`, `KHR_materials_specular`, `KHR_materials_transmission`
+//! and `KHR_materials_volume`.
 //!
 //! Inputs ([`GltfMaterial`]): `base_color` (linear RGB in [0, 1]), `metallic`
 //! in [0, 1], `roughness` (glTF's perceptual roughness) in [0, 1]; the
@@ -26,6 +26,13 @@
 //! then reflects all of `base_color`. The extension's textures multiply
 //! the factors (`specularTexture`'s alpha, `specularColorTexture`'s sRGB
 //! colour) where the scene loader reads them.
+//!
+//! `KHR_materials_clearcoat` puts a clear coat of weight `clearcoatFactor`
+//! and GGX `alpha = clearcoatRoughnessFactor^2` (clamped below at
+//! [`GltfPbr::MIN_ALPHA`]) over the opaque material
+//! ([`GltfPbr::with_clearcoat`], `brdf/gltf_coat.rs`). A coated material is
+//! always [`GltfPbr`]: neither special case below applies to it (a coated
+//! polished metal is the sharpest metal lobe under its coat, not a mirror).
 //! Beckmann [`super::CookTorrance`] is not used for glTF materials (it stays
 //! available to code and to `adaptive-pm analyze`).
 //!
@@ -79,7 +86,8 @@
 //! whatever part scatters at its boundary.
 //! [`from_gltf_material`], which returns one BRDF, refuses a mix.
 //!
-//! `KHR_materials_specular` shapes the opaque part only: the glass part
+//! `KHR_materials_specular` and `KHR_materials_clearcoat` shape the opaque
+//! part only: the glass part
 //! keeps the exact Fresnel term of its IOR (the scene loader warns when the
 //! extension would change it).
 //!
@@ -119,6 +127,32 @@ pub struct GltfMaterial {
     /// `KHR_materials_specular`; `None` without the extension (as its
     /// defaults: no change).
     pub specular: Option<GltfSpecular>,
+    /// `KHR_materials_clearcoat`; `None` without the extension (no coat).
+    pub clearcoat: Option<GltfClearcoat>,
+}
+
+/// The factors of `KHR_materials_clearcoat` (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GltfClearcoat {
+    /// `clearcoatFactor` in [0, 1]: the coat's weight (0: no coat).
+    pub factor: f32,
+    /// `clearcoatRoughnessFactor` in [0, 1] (perceptual roughness).
+    pub roughness: f32,
+}
+
+impl GltfClearcoat {
+    /// Checks the factors against the extension's ranges.
+    fn check(self) -> Result<Self> {
+        for (name, v) in [
+            ("gltf clearcoatFactor", self.factor),
+            ("gltf clearcoatRoughnessFactor", self.roughness),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(Error::param(name, format!("must be in [0, 1], got {v}")));
+            }
+        }
+        Ok(self)
+    }
 }
 
 impl GltfMaterial {
@@ -132,6 +166,7 @@ impl GltfMaterial {
             ior: None,
             volume: None,
             specular: None,
+            clearcoat: None,
         }
     }
 }
@@ -293,6 +328,8 @@ pub struct GltfLobes {
 ///   not > 0, or an `attenuationColor` channel is outside [0, 1];
 /// - `specularFactor` is NaN or outside [0, 1], or a `specularColorFactor`
 ///   channel is negative or not finite;
+/// - `clearcoatFactor` or `clearcoatRoughnessFactor` is NaN or outside
+///   [0, 1];
 /// - the material transmits partly (`0 < transmissionFactor < 1`, or
 ///   transmission on a partial metal, `0 < metallic < 1`), which one BRDF
 ///   cannot hold ([`gltf_lobes`] maps it; a full metal transmits nothing:
@@ -350,6 +387,7 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
         .unwrap_or_default()
         .check()?
         .fresnel(dielectric_f0(ior));
+    let coat = m.clearcoat.unwrap_or_default().check()?;
     let (metallic, roughness) = (m.metallic, m.roughness);
     let alone = |surface| {
         Ok(GltfLobes {
@@ -361,7 +399,13 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     // IOR 0: the Fresnel term is 1, no light enters, nothing is transmitted.
     // A full metal has no dielectric part to transmit through.
     if transmission == 0.0 || ior == 0.0 || metallic == 1.0 {
-        return alone(opaque(base_color, metallic, roughness, f0_d, f90_d)?);
+        return alone(opaque(
+            base_color,
+            metallic,
+            roughness,
+            (f0_d, f90_d),
+            coat,
+        )?);
     }
     // The glass part's share, and the rest: the metal and the opaque
     // dielectric, which the opaque mapping mixes linearly in `metallic`.
@@ -381,7 +425,7 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     // `rest` is `metallic` exactly at transmissionFactor 1: a full metal.
     let metal = (metallic / rest).min(1.0);
     Ok(GltfLobes {
-        surface: opaque(base_color, metal, roughness, f0_d, f90_d)?,
+        surface: opaque(base_color, metal, roughness, (f0_d, f90_d), coat)?,
         transmitted: Some((share, glass)),
         surface_factors: GltfMaterial {
             metallic: metal,
@@ -403,17 +447,27 @@ fn dielectric_f0(ior: f32) -> f32 {
 }
 
 /// The opaque mapping of checked factors (module docs), with dielectric
-/// Fresnel reflectance `f0_d` at normal and `f90_d` at grazing incidence.
-fn opaque(base_color: Vec3, metallic: f32, roughness: f32, f0_d: Vec3, f90_d: f32) -> Result<Brdf> {
+/// Fresnel reflectance `(f0_d, f90_d)` at normal and grazing incidence,
+/// under clear coat `coat`.
+fn opaque(
+    base_color: Vec3,
+    metallic: f32,
+    roughness: f32,
+    (f0_d, f90_d): (Vec3, f32),
+    coat: GltfClearcoat,
+) -> Result<Brdf> {
     let alpha = roughness * roughness;
-    if metallic == 1.0 && alpha < GltfPbr::MIN_ALPHA {
+    let coated = coat.factor > 0.0;
+    if metallic == 1.0 && alpha < GltfPbr::MIN_ALPHA && !coated {
         return Ok(Mirror::new(base_color)?.into());
     }
-    if metallic == 0.0 && roughness == 1.0 && f0_d.max_element() <= 0.04 {
+    if metallic == 0.0 && roughness == 1.0 && f0_d.max_element() <= 0.04 && !coated {
         return Ok(Lambert::new(base_color)?.into());
     }
     let alpha = alpha.max(GltfPbr::MIN_ALPHA);
-    Ok(GltfPbr::with_specular(base_color, metallic, alpha, f0_d, f90_d)?.into())
+    let b = GltfPbr::with_specular(base_color, metallic, alpha, f0_d, f90_d)?;
+    let coat_alpha = (coat.roughness * coat.roughness).max(GltfPbr::MIN_ALPHA);
+    Ok(b.with_clearcoat(coat.factor, coat_alpha)?.into())
 }
 
 #[cfg(test)]

@@ -63,6 +63,7 @@
 
 use super::ggx::Ggx;
 use super::ggx_energy::{average_schlick_weight, schlick_energy_weight};
+use super::gltf_coat::Coat;
 use super::phong::check_rgb01;
 use super::BrdfSample;
 use crate::error::{Error, Result};
@@ -78,12 +79,11 @@ pub struct GltfPbr {
     metallic: f32,
     f0_d: Vec3,
     f90_d: f32,
-    // Derived from the above once, as every evaluation needs it (the lobe's
-    // `f0`, `f90` and the base's `kd` are a few products, computed where
-    // used: stored, they made `Brdf`, which every hit copies, 80 bytes).
-    /// `1 / (pi (1 - E_avg))` per channel, 0 in a channel no light enters
-    /// (`E_avg = 1`), and in all when the base has no colour (a metal).
-    base_scale: Vec3,
+    /// `KHR_materials_clearcoat` ([`Coat::NONE`] without it).
+    coat: Coat,
+    // Nothing derived is stored (the lobe's `f0` and `f90`, the base's `kd`
+    // and its scale are computed where used): `Brdf`, which every hit
+    // copies, stays within 56 bytes.
 }
 
 /// Schlick's weight `(1 - c)^5`.
@@ -146,30 +146,70 @@ impl GltfPbr {
         ))
     }
 
-    /// The model of checked parameters, its derived terms computed.
+    /// The model of checked parameters.
     fn derive(ggx: Ggx, base_color: Vec3, metallic: f32, f0_d: Vec3, f90_d: f32) -> Self {
-        let kd = base_color * (1.0 - metallic);
-        let w_avg = average_schlick_weight(ggx.alpha);
-        let scale = |f0: f32| {
-            let rest = 1.0 - (f0 + (f90_d - f0) * w_avg);
-            if rest > 0.0 {
-                FRAC_1_PI / rest
-            } else {
-                0.0
-            }
-        };
-        let base_scale = match kd.max_element() > 0.0 {
-            true => Vec3::new(scale(f0_d.x), scale(f0_d.y), scale(f0_d.z)),
-            false => Vec3::ZERO,
-        };
         GltfPbr {
             ggx,
             base_color,
             metallic,
             f0_d,
             f90_d,
-            base_scale,
+            coat: Coat::NONE,
         }
+    }
+
+    /// The same model under a clear coat of weight `weight`
+    /// (`clearcoatFactor`) and GGX `alpha` (`clearcoatRoughnessFactor`
+    /// squared), `brdf/gltf_coat.rs`; a weight of 0 is no coat.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] when `weight` is NaN or outside [0, 1],
+    /// or `alpha` NaN or outside [[`Self::MIN_ALPHA`], 1].
+    pub fn with_clearcoat(self, weight: f32, alpha: f32) -> Result<Self> {
+        if !(0.0..=1.0).contains(&weight) {
+            return Err(Error::param(
+                "gltf-pbr clearcoat",
+                format!("must be in [0, 1], got {weight}"),
+            ));
+        }
+        if !(Self::MIN_ALPHA..=1.0).contains(&alpha) {
+            return Err(Error::param(
+                "gltf-pbr clearcoat alpha",
+                format!("must be in [{}, 1], got {alpha}", Self::MIN_ALPHA),
+            ));
+        }
+        let coat = match weight == 0.0 {
+            true => Coat::NONE,
+            false => Coat {
+                weight,
+                ggx: Ggx { alpha },
+            },
+        };
+        Ok(GltfPbr { coat, ..self })
+    }
+
+    /// The clear coat's weight and GGX alpha (weight 0: none).
+    pub fn clearcoat(&self) -> (f32, f32) {
+        (self.coat.weight, self.coat.ggx.alpha)
+    }
+
+    /// `1 / (pi (1 - E_avg))` per channel, 0 in a channel no light enters
+    /// (`E_avg = 1`), and in all when the base has no colour (a metal).
+    fn base_scale(&self) -> Vec3 {
+        if self.kd().max_element() <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let w_avg = average_schlick_weight(self.ggx.alpha);
+        let scale = |f0: f32| {
+            let rest = 1.0 - (f0 + (self.f90_d - f0) * w_avg);
+            if rest > 0.0 {
+                FRAC_1_PI / rest
+            } else {
+                0.0
+            }
+        };
+        let f0 = self.f0_d;
+        Vec3::new(scale(f0.x), scale(f0.y), scale(f0.z))
     }
 
     /// The same model with another base colour (a texel's), each channel
@@ -182,7 +222,10 @@ impl GltfPbr {
         } else {
             self.base_color
         };
-        Self::derive(self.ggx, base_color, self.metallic, self.f0_d, self.f90_d)
+        GltfPbr {
+            base_color,
+            ..*self
+        }
     }
 
     /// GGX alpha (glTF's roughness squared).
@@ -245,15 +288,16 @@ impl GltfPbr {
 
     /// The diffuse base's value for a pair of cosines (module docs).
     fn diffuse(&self, cos_i: f32, cos_o: f32) -> Vec3 {
-        if self.base_scale == Vec3::ZERO {
+        let scale = self.base_scale();
+        if scale == Vec3::ZERO {
             return Vec3::ZERO;
         }
-        self.kd() * (self.entering(cos_i) * self.entering(cos_o) * self.base_scale)
+        self.kd() * (self.entering(cos_i) * self.entering(cos_o) * scale)
     }
 
     /// The base's albedo `kd (1 - E_F(cos_i))`.
     fn albedo_of_base(&self, cos_i: f32) -> Vec3 {
-        if self.base_scale == Vec3::ZERO {
+        if self.kd().max_element() <= 0.0 {
             return Vec3::ZERO;
         }
         self.kd() * self.entering(cos_i)
@@ -266,12 +310,27 @@ impl GltfPbr {
         )
     }
 
+    /// The probability of sampling the coat: its reflection beside what it
+    /// lets through times the base's lobes' weights.
+    fn p_coat(&self, cos_i: f32) -> f32 {
+        let base = luminance(self.fresnel(cos_i)) + luminance(self.albedo_of_base(cos_i));
+        super::lobe_share(
+            self.coat.reflected(cos_i),
+            self.coat.transmitted(cos_i) * base,
+        )
+    }
+
     /// Evaluates the BRDF (0 when either direction is below the horizon).
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Vec3 {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Vec3::ZERO;
         }
-        self.diffuse(wi.z, wo.z) + self.specular(wi, wo)
+        let base = self.diffuse(wi.z, wo.z) + self.specular(wi, wo);
+        if self.coat.is_none() {
+            return base;
+        }
+        let through = self.coat.transmitted(wi.z) * self.coat.transmitted(wo.z);
+        base * through + Vec3::splat(self.coat.eval(wi, wo))
     }
 
     /// The specular lobe `F D G / (4 cos_i cos_o)` (both directions above
@@ -294,6 +353,13 @@ impl GltfPbr {
         if wi.z.is_nan() || wi.z <= 0.0 {
             return None;
         }
+        let mut u = u;
+        if !self.coat.is_none() {
+            match super::pick_lobe(u[0], self.p_coat(wi.z)) {
+                (true, u0) => return self.weighted(wi, self.coat.sample_wo(wi, [u0, u[1]])?),
+                (false, u0) => u[0] = u0,
+            }
+        }
         let ps = self.p_spec(wi.z);
         let wo = match super::pick_lobe(u[0], ps) {
             (true, u0) => {
@@ -306,6 +372,11 @@ impl GltfPbr {
             }
             (false, u0) => cosine_hemisphere([u0, u[1]]),
         };
+        self.weighted(wi, wo)
+    }
+
+    /// The sample of direction `wo`, weighted by the whole BRDF and pdf.
+    fn weighted(&self, wi: Vec3, wo: Vec3) -> Option<(BrdfSample, Vec3)> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -323,7 +394,12 @@ impl GltfPbr {
             Some(h) if wi.dot(h) > 0.0 => self.ggx.d_visible(wi, h) / (4.0 * wi.dot(h)),
             _ => 0.0,
         };
-        ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wo.z)
+        let base = ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wo.z);
+        if self.coat.is_none() {
+            return base;
+        }
+        let pc = self.p_coat(wi.z);
+        pc * self.coat.pdf(wi, wo) + (1.0 - pc) * base
     }
 
     /// Directional albedo, per channel: the base's
@@ -335,12 +411,30 @@ impl GltfPbr {
         if wi.z.is_nan() || wi.z <= 0.0 {
             return Vec3::ZERO;
         }
-        self.albedo_of_base(wi.z) + self.albedo_of_specular(wi)
+        if self.coat.is_none() {
+            return self.albedo_of_base(wi.z) + self.albedo_of_specular(wi);
+        }
+        // Under a coat: what it lets in, times what the base sends out
+        // through it (the base's integrals weighted by T(cos_o)).
+        let through = |wo: Vec3| f64::from(self.coat.transmitted(wo.z));
+        let specular = self.specular_of(self.ggx.lobe_energy_weighted(wi, through));
+        let diffuse = match self.kd().max_element() > 0.0 {
+            true => {
+                let out = self.coat.cosine_weighted_through(|mu| self.entering(mu));
+                self.albedo_of_base(wi.z) * out * (std::f32::consts::PI * self.base_scale())
+            }
+            false => Vec3::ZERO,
+        };
+        Vec3::splat(self.coat.albedo(wi)) + self.coat.transmitted(wi.z) * (diffuse + specular)
     }
 
     /// The specular lobe's share of [`Self::albedo`].
     fn albedo_of_specular(&self, wi: Vec3) -> Vec3 {
-        let e = self.ggx.lobe_energy(wi);
+        self.specular_of(self.ggx.lobe_energy(wi))
+    }
+
+    /// The specular lobe's albedo from its moments.
+    fn specular_of(&self, e: super::ggx::LobeEnergy) -> Vec3 {
         let f0 = self.f0();
         f0 * e.shadowed + (Vec3::splat(self.f90()) - f0) * e.shadowed_schlick
     }
@@ -445,12 +539,14 @@ mod tests {
             .map(|f| (Vec3::splat(f), 1.0))
             .into_iter()
             .chain([(coloured, 1.0), (coloured, 0.5), (Vec3::splat(0.3), 0.0)]);
-        for (f0_d, f90_d) in dielectrics {
+        let coats = [(0.0f32, 1.0f32), (1.0, 1e-3), (0.5, 0.2), (1.0, 1.0)];
+        for ((f0_d, f90_d), (coat, coat_alpha)) in dielectrics.flat_map(|d| coats.map(|c| (d, c))) {
             for metallic in [0.0f32, 0.5, 1.0] {
-                for k in 0..=10 {
+                for k in (0..=10).step_by(2) {
                     let r = 0.032 + (1.0 - 0.032) * k as f32 / 10.0;
-                    let b =
-                        GltfPbr::with_specular(Vec3::ONE, metallic, r * r, f0_d, f90_d).unwrap();
+                    let b = GltfPbr::with_specular(Vec3::ONE, metallic, r * r, f0_d, f90_d)
+                        .and_then(|b| b.with_clearcoat(coat, coat_alpha))
+                        .unwrap();
                     for j in 0..=25 {
                         let c = (j as f32 / 25.0).max(1e-3);
                         let a = b.albedo(spherical_direction(c, 0.0));
@@ -501,6 +597,36 @@ mod tests {
             let want = 0.6 * std::f32::consts::FRAC_1_PI;
             assert!((b.eval(l, v) - Vec3::splat(want)).abs().max_element() < 1e-7);
         }
+    }
+
+    #[test]
+    fn the_coat_is_the_extensions_lobe_over_the_base_seen_through_it_twice() {
+        let base = GltfPbr::new(Vec3::new(0.8, 0.2, 0.1), 0.3, 0.25, 0.04).unwrap();
+        for (weight, roughness) in [(1.0f32, 0.1f32), (0.4, 0.6)] {
+            let alpha = roughness * roughness;
+            let coated = base.with_clearcoat(weight, alpha).unwrap();
+            let through = |mu: f32| {
+                let w = super::super::ggx_energy::schlick_energy_weight(mu, alpha);
+                1.0 - weight * (0.04 + 0.96 * w)
+            };
+            for (ci, pi, co, po) in DIRS {
+                let (l, v) = (spherical_direction(ci, pi), spherical_direction(co, po));
+                // The coat's lobe: the specification's dielectric layer
+                // (its specular_brdf times a Fresnel of 0.04), weighted.
+                let (_, layer) = spec_reference([0.0; 3], roughness.into(), l, v);
+                let want = base.eval(l, v) * (through(l.z) * through(v.z));
+                let got = coated.eval(l, v) - Vec3::splat(weight * layer as f32);
+                let err = (got - want).abs().max_element();
+                let what = format!("{weight} {ci} {co}: {got} vs {want}");
+                assert!(err <= 1e-4 * want.max_element().max(1.0), "{what}");
+                let (a, r) = (coated.eval(l, v), coated.eval(v, l));
+                assert!((a - r).abs().max_element() <= 1e-5 * a.max_element().max(1.0));
+            }
+        }
+        // Weight 0 is no coat at all.
+        assert_eq!(base.with_clearcoat(0.0, 0.3).unwrap(), base);
+        assert!(base.with_clearcoat(1.5, 0.3).is_err());
+        assert!(base.with_clearcoat(0.5, 0.0).is_err());
     }
 
     #[test]

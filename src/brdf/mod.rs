@@ -20,6 +20,7 @@ pub mod cook_torrance;
 pub mod dielectric;
 mod ggx;
 mod ggx_energy;
+mod gltf_coat;
 pub mod gltf_map;
 pub mod gltf_pbr;
 pub mod lambert;
@@ -30,8 +31,8 @@ pub mod rough_dielectric;
 pub use cook_torrance::CookTorrance;
 pub use dielectric::{Dielectric, Transport};
 pub use gltf_map::{
-    from_gltf_material, from_gltf_pbr, gltf_lobes, GltfLobes, GltfMaterial, GltfSpecular,
-    GltfVolume,
+    from_gltf_material, from_gltf_pbr, gltf_lobes, GltfClearcoat, GltfLobes, GltfMaterial,
+    GltfSpecular, GltfVolume,
 };
 pub use gltf_pbr::GltfPbr;
 pub use lambert::Lambert;
@@ -93,6 +94,12 @@ pub(crate) fn lobe_share(a: f32, b: f32) -> f32 {
         1.0
     }
 }
+
+/// The words of [`Brdf::param_bits`].
+pub const PARAM_WORDS: usize = 11;
+
+/// [`Brdf::param_bits`]'s tag of a glTF BRDF under a clear coat.
+const COATED_GLTF_TAG: u8 = 9;
 
 /// The reflection models a scene may use.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -295,19 +302,49 @@ impl Brdf {
     /// The model's tag and the exact bits of its parameters (-0.0 folded
     /// into 0.0): equal models, and only they, have equal values. The
     /// analysis cache is keyed by it.
-    pub fn param_bits(&self) -> (u8, [u32; 9]) {
-        let (tag, params): (u8, [f32; 9]) = match self {
+    pub fn param_bits(&self) -> (u8, [u32; PARAM_WORDS]) {
+        let (tag, params): (u8, [f32; PARAM_WORDS]) = match self {
             Brdf::Lambert(b) => {
                 let a = b.albedo;
-                (1, [a.x, a.y, a.z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+                (1, [a.x, a.y, a.z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
             }
             Brdf::Phong(b) => {
                 let (d, s) = (b.kd(), b.ks());
-                (2, [d.x, d.y, d.z, s.x, s.y, s.z, b.exponent(), 0.0, 0.0])
+                (
+                    2,
+                    [
+                        d.x,
+                        d.y,
+                        d.z,
+                        s.x,
+                        s.y,
+                        s.z,
+                        b.exponent(),
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                )
             }
             Brdf::CookTorrance(b) => {
                 let (d, f) = (b.kd(), b.f0());
-                (3, [d.x, d.y, d.z, f.x, f.y, f.z, b.roughness(), 0.0, 0.0])
+                (
+                    3,
+                    [
+                        d.x,
+                        d.y,
+                        d.z,
+                        f.x,
+                        f.y,
+                        f.z,
+                        b.roughness(),
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                )
             }
             Brdf::GltfPbr(b) => {
                 let c = b.base_color();
@@ -320,25 +357,50 @@ impl Brdf {
                 // A grey f0 and f90 = 1 (no KHR_materials_specular) keep the
                 // tag and layout of before it, so the analysis draws the
                 // numbers it drew (it is seeded by `key`).
-                if f == Vec3::splat(f.x) && f90 == 1.0 {
-                    (7, [c.x, c.y, c.z, m, a, f.x, 0.0, 0.0, 0.0])
+                // A clear coat takes a tag and the two last words of its own.
+                let (cw, ca) = b.clearcoat();
+                if cw > 0.0 {
+                    (
+                        COATED_GLTF_TAG,
+                        [c.x, c.y, c.z, m, a, f.x, f.y, f.z, f90, cw, ca],
+                    )
+                } else if f == Vec3::splat(f.x) && f90 == 1.0 {
+                    (7, [c.x, c.y, c.z, m, a, f.x, 0.0, 0.0, 0.0, 0.0, 0.0])
                 } else {
-                    (8, [c.x, c.y, c.z, m, a, f.x, f.y, f.z, f90])
+                    (8, [c.x, c.y, c.z, m, a, f.x, f.y, f.z, f90, 0.0, 0.0])
                 }
             }
             Brdf::Mirror(b) => {
                 let r = b.reflectance();
-                (4, [r.x, r.y, r.z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+                (4, [r.x, r.y, r.z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
             }
             Brdf::Dielectric(b) => {
                 let (t, a) = (b.tint(), b.attenuation());
                 let thin = f32::from(u8::from(b.thin()));
-                (5, [t.x, t.y, t.z, a.x, a.y, a.z, b.ior(), thin, 0.0])
+                (
+                    5,
+                    [t.x, t.y, t.z, a.x, a.y, a.z, b.ior(), thin, 0.0, 0.0, 0.0],
+                )
             }
             Brdf::RoughDielectric(b) => {
                 let (t, a) = (b.tint(), b.attenuation());
                 let thin = f32::from(u8::from(b.thin()));
-                (6, [t.x, t.y, t.z, a.x, a.y, a.z, b.ior(), thin, b.alpha()])
+                (
+                    6,
+                    [
+                        t.x,
+                        t.y,
+                        t.z,
+                        a.x,
+                        a.y,
+                        a.z,
+                        b.ior(),
+                        thin,
+                        b.alpha(),
+                        0.0,
+                        0.0,
+                    ],
+                )
             }
         };
         // +0.0 folds -0.0 into 0.0 so equal values give equal bits.
@@ -350,7 +412,14 @@ impl Brdf {
     /// matter, key by [`Brdf::param_bits`] itself.
     pub fn key(&self) -> u64 {
         let (tag, bits) = self.param_bits();
-        bits.iter().fold(tag as u64, |k, &v| hash2(k, v as u64))
+        // The nine words the models had before the clear coat are hashed
+        // alone, so their keys (the analysis's seeds) stay what they were.
+        let words = if tag == COATED_GLTF_TAG {
+            &bits[..]
+        } else {
+            &bits[..9]
+        };
+        words.iter().fold(tag as u64, |k, &v| hash2(k, v as u64))
     }
 }
 

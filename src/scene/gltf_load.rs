@@ -466,17 +466,27 @@ fn load_mesh(
 /// (`brdf/gltf_map.rs`).
 fn warn_specular_on_glass(m: &gltf::Material, brdf: &Brdf, partly: bool, scene: &mut Scene) {
     let glass = partly || matches!(brdf, Brdf::Dielectric(_) | Brdf::RoughDielectric(_));
+    if !glass {
+        return;
+    }
+    let label = super::gltf_textures::material_label(m);
     let changes = m.specular().is_some_and(|s| {
         s.specular_factor() != 1.0
             || s.specular_color_factor() != [1.0; 3]
             || s.specular_texture().is_some()
             || s.specular_color_texture().is_some()
     });
-    if glass && changes {
-        let label = super::gltf_textures::material_label(m);
+    if changes {
         scene.warnings.push(format!(
             "{label}: KHR_materials_specular is not modelled on its transmitting (glass) part, \
              which reflects by its IOR's Fresnel term"
+        ));
+    }
+    let coated =
+        super::gltf_textures::clearcoat_of(m).is_ok_and(|c| c.is_some_and(|c| c.factor > 0.0));
+    if coated {
+        scene.warnings.push(format!(
+            "{label}: KHR_materials_clearcoat is not modelled on its transmitting (glass) part"
         ));
     }
 }
@@ -572,6 +582,8 @@ fn convert_material(m: &gltf::Material) -> Result<Converted> {
             factor: s.specular_factor(),
             color: Vec3::from(s.specular_color_factor()),
         }),
+        clearcoat: super::gltf_textures::clearcoat_of(m)
+            .map_err(|e| Error::InvalidScene(format!("{label}: {e}")))?,
     };
     let lobes = gltf_lobes(&input).map_err(|e| Error::InvalidScene(format!("{label}: {e}")))?;
     let brdf = lobes.surface;

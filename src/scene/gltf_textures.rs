@@ -20,7 +20,7 @@ use super::normal_map::NormalMap;
 use super::texture::{Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
 use super::textured::MaterialMaps;
 use super::Scene;
-use crate::brdf::GltfMaterial;
+use crate::brdf::{GltfClearcoat, GltfMaterial};
 use crate::error::{Error, Result};
 use glam::Vec2;
 use std::collections::HashMap;
@@ -310,13 +310,59 @@ fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
             .warnings
             .push(format!("{label}: {what} is not modelled"));
     }
-    // The extensions the loader reads are parsed by the gltf crate; any
-    // other (clearcoat, sheen, specular, unlit, ...) is ignored, and said so.
-    for name in m.extensions().into_iter().flat_map(|e| e.keys()) {
-        scene.warnings.push(format!(
-            "{label}: its extension {name} is not modelled (ignored)"
-        ));
+    // The extensions the loader reads are parsed by the gltf crate, but the
+    // clear coat, read from its JSON; any other (sheen, unlit, ...) is
+    // ignored, and said so.
+    for (name, value) in m.extensions().into_iter().flatten() {
+        if name != CLEARCOAT {
+            scene.warnings.push(format!(
+                "{label}: its extension {name} is not modelled (ignored)"
+            ));
+            continue;
+        }
+        for texture in [
+            "clearcoatTexture",
+            "clearcoatRoughnessTexture",
+            "clearcoatNormalTexture",
+        ] {
+            if value.get(texture).is_some() {
+                scene.warnings.push(format!(
+                    "{label}: its {CLEARCOAT} {texture} is not read (the factors are)"
+                ));
+            }
+        }
     }
+}
+
+/// The clear coat extension, which the gltf crate does not parse.
+const CLEARCOAT: &str = "KHR_materials_clearcoat";
+
+/// The factors of material `m`'s `KHR_materials_clearcoat` (read from its
+/// JSON; ranges are checked by the mapping); `None` without it.
+///
+/// # Errors
+/// A message naming the property when the extension is not an object or a
+/// factor is not a number.
+pub(super) fn clearcoat_of(
+    m: &gltf::Material,
+) -> std::result::Result<Option<GltfClearcoat>, String> {
+    let Some(v) = m.extension_value(CLEARCOAT) else {
+        return Ok(None);
+    };
+    if !v.is_object() {
+        return Err(format!("{CLEARCOAT} is not a JSON object"));
+    }
+    let number = |key: &str| match v.get(key) {
+        None => Ok(0.0),
+        Some(x) => x
+            .as_f64()
+            .map(|x| x as f32)
+            .ok_or_else(|| format!("{CLEARCOAT} {key} is not a number")),
+    };
+    Ok(Some(GltfClearcoat {
+        factor: number("clearcoatFactor")?,
+        roughness: number("clearcoatRoughnessFactor")?,
+    }))
 }
 
 /// Reads the texture coordinates the mesh's material needs, from primitive

@@ -78,6 +78,20 @@ fn glossy_models() -> Vec<(&'static str, Brdf)> {
             .into(),
         ),
         (
+            "gltf clear-coated dielectric",
+            GltfPbr::new(Vec3::new(0.6, 0.1, 0.1), 0.0, 0.36, 0.04)
+                .and_then(|b| b.with_clearcoat(0.8, 0.09))
+                .unwrap()
+                .into(),
+        ),
+        (
+            "gltf clear-coated metal, rough coat",
+            GltfPbr::new(Vec3::new(0.9, 0.7, 0.3), 1.0, 0.2, 0.04)
+                .and_then(|b| b.with_clearcoat(1.0, 0.3))
+                .unwrap()
+                .into(),
+        ),
+        (
             "gltf metal r=0.4",
             GltfPbr::new(Vec3::new(0.95, 0.64, 0.54), 1.0, 0.16, 0.04)
                 .unwrap()
@@ -88,6 +102,16 @@ fn glossy_models() -> Vec<(&'static str, Brdf)> {
 
 fn gltf(base: f32, metallic: f32, roughness: f32, f0_d: f32) -> Brdf {
     GltfPbr::new(Vec3::splat(base), metallic, roughness * roughness, f0_d)
+        .unwrap()
+        .into()
+}
+
+/// `b` (a glTF BRDF) under a clear coat of `weight` and `roughness`.
+fn coated(b: Brdf, weight: f32, roughness: f32) -> Brdf {
+    let Brdf::GltfPbr(g) = b else {
+        panic!("a glTF BRDF")
+    };
+    g.with_clearcoat(weight, roughness * roughness)
         .unwrap()
         .into()
 }
@@ -290,6 +314,18 @@ fn energy_is_conserved_and_albedo_matches_monte_carlo() {
         ("gltf white dielectric r=1", gltf(1.0, 0.0, 1.0, 0.04)),
         ("gltf white ior 2.4 r=.3", gltf(1.0, 0.0, 0.3, 0.17)),
         ("gltf white half-metal r=.2", gltf(1.0, 0.5, 0.2, 0.04)),
+        (
+            "gltf white dielectric r=.5, coat r=.1",
+            coated(gltf(1.0, 0.0, 0.5, 0.04), 1.0, 0.1),
+        ),
+        (
+            "gltf white dielectric r=1, coat r=1",
+            coated(gltf(1.0, 0.0, 1.0, 0.04), 1.0, 1.0),
+        ),
+        (
+            "gltf white metal r=.3, half coat r=.5",
+            coated(gltf(1.0, 1.0, 0.3, 0.04), 0.5, 0.5),
+        ),
     ];
     for (name, b) in worst {
         for (k, cos) in [1.0f32, 0.8, 0.5, 0.2, 0.05, 0.01].into_iter().enumerate() {
