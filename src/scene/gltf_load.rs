@@ -22,6 +22,7 @@
 //! - Materials map to BRDFs by [`crate::brdf::gltf_map::gltf_lobes`]:
 //!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_specular`
 //!   (the dielectric's Fresnel colour and strength, with its textures),
+//!   `KHR_materials_clearcoat` (a clear coat of its factors),
 //!   `KHR_materials_transmission` (glass) and `KHR_materials_volume` (thin
 //!   wall or refracting volume, absorption); partial transmission (or transmission on a partial
 //!   metal) is its opaque part and a glass part

@@ -1,6 +1,9 @@
-//! `KHR_materials_specular`: the dielectric's Fresnel term coloured and
-//! scaled as the extension defines it, its textures read at each hit, the
-//! factors checked by name, and photons reflected as the model says.
+//! The layers of a glTF material over its base: `KHR_materials_specular`
+//! (the dielectric's Fresnel term coloured and scaled as the extension
+//! defines it, its textures read at each hit) and `KHR_materials_clearcoat`
+//! (a clear coat of its factors); the factors checked by name, photons
+//! reflected as the model says, and Blender's exported values read as
+//! Blender means them.
 
 use adaptive_pm::brdf::{Brdf, GltfPbr};
 use adaptive_pm::embree::Device;
@@ -233,14 +236,14 @@ fn bad_factors_are_refused_by_name_and_glass_says_what_it_ignores() {
     assert!(!w.contains(EXT), "{w}");
 }
 
-/// `assets/blender_specular.glb`, written by Blender 3.4's exporter
-/// (`tools/blender_specular.py`): Principled Specular `s` and Specular Tint
+/// `assets/blender_layers.glb`, written by Blender 3.4's exporter
+/// (`tools/blender_layers.py`): Principled Specular `s` and Specular Tint
 /// `t` on a base colour `b` become the dielectric reflectance Blender itself
 /// uses, `0.08 s ((1 - t) + t b / lum(b))`, whatever the IOR the exporter
 /// divides by and the extension multiplies back.
 #[test]
-fn blenders_specular_reaches_the_model_as_blender_means_it() {
-    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/blender_specular.glb");
+fn blenders_specular_and_clearcoat_reach_the_model_as_blender_means_them() {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/blender_layers.glb");
     let scene = Scene::load(&file).unwrap();
     let material = |name: &str| {
         let m = scene.materials().iter().find(|m| m.name == name);
@@ -266,6 +269,82 @@ fn blenders_specular_reaches_the_model_as_blender_means_it() {
     }
     // Specular 0 is a black specular colour: a rough base alone, Lambert.
     assert!(matches!(material("matte"), Brdf::Lambert(l) if close(l.albedo, Vec3::splat(0.5))));
+    // Clearcoat 1 and Clearcoat Roughness 0.1: a coat of weight 1, alpha 0.01.
+    let (w, a) = pbr(material("lacquer")).clearcoat();
+    assert_eq!(w, 1.0);
+    assert!((a - 0.01).abs() < 1e-7, "{a}");
     let w = scene.warnings().join("\n");
-    assert!(!w.contains(EXT), "{w}");
+    assert!(!w.contains(EXT) && !w.contains(COAT), "{w}");
+}
+
+const COAT: &str = "KHR_materials_clearcoat";
+
+#[test]
+fn a_clear_coat_is_read_from_its_factors_and_its_textures_are_named() {
+    let coated = |coat: Value| {
+        let mut m = floor(0.5, 1.0, Value::Null);
+        m["extensions"] = json!({ COAT: coat });
+        let mut doc = floor_scene(m);
+        doc.extensions_used.push(COAT);
+        doc
+    };
+    // A rough matte floor under a coat is no longer Lambert.
+    let scene = load(&coated(
+        json!({"clearcoatFactor": 0.8, "clearcoatRoughnessFactor": 0.3}),
+    ));
+    let g = pbr(scene.materials()[0].brdf);
+    let (w, a) = g.clearcoat();
+    assert_eq!(w, 0.8);
+    assert!((a - 0.09).abs() < 1e-7, "{a}");
+    assert!(!scene.warnings().join("\n").contains(COAT));
+    // Defaults: no coat at all (factor 0), and roughness 0 is the sharpest lobe.
+    let none = load(&coated(json!({})));
+    assert!(matches!(none.materials()[0].brdf, Brdf::Lambert(_)));
+    let sharp = load(&coated(json!({"clearcoatFactor": 1.0})));
+    assert_eq!(
+        pbr(sharp.materials()[0].brdf).clearcoat(),
+        (1.0, GltfPbr::MIN_ALPHA)
+    );
+    // Its textures are not read: each is named.
+    let mut doc = coated(json!({"clearcoatFactor": 1.0, "clearcoatTexture": {"index": 0}}));
+    doc.texture(
+        &crate::gltf_textures::png_rgb(1, 1, &[[255, 255, 255]]),
+        json!({}),
+    );
+    let w = load(&doc).warnings().join("\n");
+    assert!(w.contains("clearcoatTexture is not read"), "{w}");
+    // Out of range and malformed: refused, naming the material.
+    for (coat, what) in [
+        (json!({"clearcoatFactor": 1.5}), "clearcoatFactor"),
+        (
+            json!({"clearcoatRoughnessFactor": -1.0}),
+            "clearcoatRoughnessFactor",
+        ),
+        (json!({"clearcoatFactor": "lots"}), "clearcoatFactor"),
+    ] {
+        let e = load_err(&coated(coat));
+        assert!(e.contains("floor") && e.contains(what), "{e}");
+    }
+}
+
+#[test]
+fn photons_reflect_more_from_a_dark_base_under_a_coat() {
+    // A dark matte floor: its coat adds a sheen the light can see, and
+    // takes from the base what the sheen reflects. Against the same floor
+    // uncoated, the coat raises what reaches the ceiling (the base is
+    // dark).
+    let coated = {
+        let mut m = floor(0.1, 1.0, Value::Null);
+        m["extensions"] = json!({COAT: {"clearcoatFactor": 1.0, "clearcoatRoughnessFactor": 0.6}});
+        let mut doc = floor_scene(m);
+        doc.extensions_used.push(COAT);
+        load(&doc)
+    };
+    let plain = load(&floor_scene(floor(0.1, 1.0, Value::Null)));
+    let seed = common::seed(91);
+    let (c, c_se) = reflected_up(&coated, seed);
+    let (p, p_se) = reflected_up(&plain, seed + 1);
+    eprintln!("reflected up: coated {c} +- {c_se}, plain {p} +- {p_se}");
+    let se = c_se.hypot(p_se);
+    assert!(c - p > 4.0 * se, "the coat reflects: {c} vs {p} (se {se})");
 }

@@ -1,6 +1,7 @@
-"""Builds a scene whose materials set Principled BSDF's Specular and Specular
-Tint, and exports it with Blender's own glTF exporter: assets/blender_specular.glb,
-a file written by a real exporter with KHR_materials_specular. Blender is needed
+"""Builds a scene whose materials set Principled BSDF's Specular, Specular Tint
+and Clearcoat, and exports it with Blender's own glTF exporter:
+assets/blender_layers.glb, a file written by a real exporter with
+KHR_materials_specular and KHR_materials_clearcoat. Blender is needed
 only to regenerate the file, never by CI or the tests. It reuses
 tools/blender_scene.py's helpers (same Blender, same exporter settings).
 
@@ -8,7 +9,7 @@ Produced on Debian bookworm with Blender 3.4.1 (Debian package 3.4.1+dfsg-2,
 `apt-get install --no-install-recommends blender python3-numpy`), run from the
 repository root:
 
-    blender -b --factory-startup --python tools/blender_specular.py -- --out assets/blender_specular.glb
+    blender -b --factory-startup --python tools/blender_layers.py -- --out assets/blender_layers.glb
 
 Blender 3.4's exporter writes Specular `s` and Specular Tint `t` on a base
 colour `b` (transmission 0) as `specularColorFactor = 0.08 s k / f0(ior)`,
@@ -24,6 +25,9 @@ The scene (Blender is Z-up; the exporter writes glTF's Y-up), in metres:
   exporter writes a black specularColorFactor: no reflection at all);
 - plain: a 1 m x 1 m plane 0.7 m up, roughness 0.5, Blender's defaults
   (Specular 0.5, no extension);
+- lacquer: a 1 m x 1 m plane 0.9 m up, red (0.6, 0.05, 0.05), roughness 0.5,
+  Clearcoat 1, Clearcoat Roughness 0.1 (the exporter writes
+  KHR_materials_clearcoat with both factors);
 - a light panel: a 0.6 m x 0.6 m plane 2 m up, face turned down, a bare
   Emission shader of strength 20;
 - a perspective camera at a 3/4 view from 2.2 m high.
@@ -42,7 +46,7 @@ import blender_scene as base  # noqa: E402
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     if len(argv) != 2 or argv[0] != "--out":
-        raise SystemExit("blender_specular.py: use -- --out FILE.glb")
+        raise SystemExit("blender_layers.py: use -- --out FILE.glb")
     return argv[1]
 
 
@@ -73,6 +77,10 @@ def build():
     plane("tinted", 1.0, tinted, (-0.6, 0.0, 0.5))
     plane("matte", 1.0, specular("matte", (0.5, 0.5, 0.5), 1.0, 0.0), (0.6, 0.0, 0.3))
     plane("plain", 1.0, specular("plain", (0.5, 0.5, 0.5), 0.5, 0.5), (0.0, 0.8, 0.7))
+    lacquer, bsdf = base.principled("lacquer", (0.6, 0.05, 0.05), roughness=0.5, ior=1.5)
+    bsdf.inputs["Clearcoat"].default_value = 1.0
+    bsdf.inputs["Clearcoat Roughness"].default_value = 0.1
+    plane("lacquer", 1.0, lacquer, (0.0, -0.8, 0.9))
 
     panel = base.emission("panel_emission", (1.0, 1.0, 1.0), 20.0)
     plane("panel", 0.6, panel, (0.2, 0.1, 2.0), (math.pi, 0.0, 0.0))
@@ -92,7 +100,7 @@ def main():
     base.clear_scene()
     build()
     base.export(out)
-    print(f"blender_specular.py: wrote {out}")
+    print(f"blender_layers.py: wrote {out}")
 
 
 main()
