@@ -30,6 +30,12 @@ fn functions() -> Vec<Named> {
         ("ct0.05", Some(ct(0.05).into()), 0.0),
         ("gltf-metal0.3", Some(gltf(0.3).into()), 0.0),
         ("gltf-plastic0.5", Some(plastic.into()), 0.0),
+        // The plastic under a clear coat of roughness 0.1 (KHR_materials_clearcoat).
+        (
+            "gltf-coated0.1",
+            Some(plastic.with_clearcoat(1.0, 0.01).unwrap().into()),
+            0.0,
+        ),
         // Rough glass: the analysis over the whole sphere (reflection and
         // transmission).
         ("rough-glass0.3", Some(glass(0.09).into()), 0.0),

@@ -91,10 +91,11 @@
 //! keeps the exact Fresnel term of its IOR (the scene loader warns when the
 //! extension would change it).
 //!
-//! The extensions' textures, but `KHR_materials_specular`'s, are ignored
-//! (the opaque materials' base colour, metallic-roughness and specular
-//! textures are read by the scene loader, which maps each point's factors
-//! here).
+//! The extensions' textures, but `KHR_materials_specular`'s and
+//! `KHR_materials_clearcoat`'s weight and roughness textures, are ignored
+//! (the opaque materials' base colour, metallic-roughness, specular and
+//! clear coat textures are read by the scene loader, which maps each
+//! point's factors here).
 //!
 //! # The IOR
 //! Default 1.5. It must be in [1, 4] (the specification allows any value

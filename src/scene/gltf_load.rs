@@ -22,7 +22,8 @@
 //! - Materials map to BRDFs by [`crate::brdf::gltf_map::gltf_lobes`]:
 //!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_specular`
 //!   (the dielectric's Fresnel colour and strength, with its textures),
-//!   `KHR_materials_clearcoat` (a clear coat of its factors),
+//!   `KHR_materials_clearcoat` (a clear coat, with its weight and roughness
+//!   textures),
 //!   `KHR_materials_transmission` (glass) and `KHR_materials_volume` (thin
 //!   wall or refracting volume, absorption); partial transmission (or transmission on a partial
 //!   metal) is its opaque part and a glass part
@@ -145,7 +146,7 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
     let mut material_ids = Vec::with_capacity(doc.materials().len());
     // The factors of each, for the maps that vertex colours need.
     let mut material_factors = Vec::with_capacity(doc.materials().len());
-    let mut textures = super::gltf_textures::TextureLoader::new(doc.as_json(), &buffers, assets);
+    let mut textures = super::gltf_textures::TextureLoader::new(&doc, &buffers, assets);
     for m in doc.materials() {
         let Converted {
             material,

@@ -27,6 +27,7 @@ use std::collections::HashMap;
 
 /// Loads each texture once, the first time a material reads it.
 pub(super) struct TextureLoader<'a> {
+    doc: &'a gltf::Document,
     json: &'a gltf::json::Root,
     buffers: &'a [Vec<u8>],
     assets: Option<&'a AssetRoot>,
@@ -60,12 +61,13 @@ fn sampler_of(s: &gltf::texture::Sampler) -> Sampler {
 
 impl<'a> TextureLoader<'a> {
     pub(super) fn new(
-        json: &'a gltf::json::Root,
+        doc: &'a gltf::Document,
         buffers: &'a [Vec<u8>],
         assets: Option<&'a AssetRoot>,
     ) -> Self {
         TextureLoader {
-            json,
+            doc,
+            json: doc.as_json(),
             buffers,
             assets,
             loaded: HashMap::new(),
@@ -89,24 +91,32 @@ impl<'a> TextureLoader<'a> {
         let pbr = m.pbr_metallic_roughness();
         let ext = m.specular();
         // The textures that shape the BRDF: base colour, metallic-roughness,
-        // specular strength, specular colour.
+        // specular strength, specular colour; and the clear coat's, which
+        // the gltf crate does not parse (checked by `check_json`).
         let mut shaping = [
             pbr.base_color_texture(),
             pbr.metallic_roughness_texture(),
             ext.as_ref().and_then(|s| s.specular_texture()),
             ext.as_ref().and_then(|s| s.specular_color_texture()),
         ];
+        let coat = m.extension_value(CLEARCOAT);
+        let mut coat_shaping = ["clearcoatTexture", "clearcoatRoughnessTexture"]
+            .map(|key| coat.and_then(|c| c.get(key)));
         let normal = m.normal_texture();
+        let shapes = |a: &[Option<gltf::texture::Info>], b: &[Option<&serde_json::Value>]| {
+            a.iter().any(Option::is_some) || b.iter().any(Option::is_some)
+        };
         // A mirror or glass bends its normals, but scatters by its factors.
-        if specular && shaping.iter().any(Option::is_some) {
+        if specular && shapes(&shaping, &coat_shaping) {
             scene.warnings.push(format!(
-                "{label}: its base colour, metallic-roughness and specular textures are not \
-                 read (a mirror or glass scatters by its factors; \
+                "{label}: its base colour, metallic-roughness, specular and clear coat \
+                 textures are not read (a mirror or glass scatters by its factors; \
                  only an alphaMode MASK reads the base colour texture's alpha)"
             ));
             shaping = [None, None, None, None];
+            coat_shaping = [None, None];
         }
-        if shaping.iter().all(Option::is_none) && normal.is_none() {
+        if !shapes(&shaping, &coat_shaping) && normal.is_none() {
             return Ok(None);
         }
         let mut maps = MaterialMaps::new(factors);
@@ -119,6 +129,15 @@ impl<'a> TextureLoader<'a> {
         ] {
             if let Some(info) = info {
                 *slot = self.texture_ref(&info, scene)?;
+            }
+        }
+        let [coat_weight, coat_roughness] = coat_shaping;
+        for (info, slot) in [
+            (coat_weight, &mut maps.clearcoat),
+            (coat_roughness, &mut maps.clearcoat_roughness),
+        ] {
+            if let Some(info) = info {
+                *slot = self.json_texture_ref(info, scene)?;
             }
         }
         if let Some(n) = normal {
@@ -229,6 +248,41 @@ impl<'a> TextureLoader<'a> {
         }))
     }
 
+    /// How a `textureInfo` that the gltf crate does not parse (an
+    /// extension's, checked by [`check_json`]) reads its texture; `None`
+    /// when the texture names no image.
+    fn json_texture_ref(
+        &mut self,
+        info: &serde_json::Value,
+        scene: &mut Scene,
+    ) -> Result<Option<TextureRef>> {
+        let info = json_info(info).map_err(Error::InvalidScene)?;
+        let Some(t) = self.doc.textures().nth(info.index.value()) else {
+            return Err(Error::InvalidScene(format!(
+                "a texture info names texture {}, which does not exist",
+                info.index.value()
+            )));
+        };
+        let Some(texture) = self.scene_texture(&t, scene)? else {
+            return Ok(None);
+        };
+        let x = info
+            .extensions
+            .as_ref()
+            .and_then(|e| e.texture_transform.as_ref());
+        let transform = x.map_or_else(TexTransform::default, |x| TexTransform {
+            offset: Vec2::from(x.offset.0),
+            rotation: x.rotation.0,
+            scale: Vec2::from(x.scale.0),
+        });
+        let tex_coord = x.and_then(|x| x.tex_coord).unwrap_or(info.tex_coord);
+        Ok(Some(TextureRef {
+            texture,
+            tex_coord: tex_coord as usize,
+            transform,
+        }))
+    }
+
     /// The image glTF texture `t` reads: its `source`, or else the image
     /// `EXT_texture_webp` names (a file that requires the extension may
     /// leave `source` out; with both, `source` is the same picture in a
@@ -320,22 +374,22 @@ fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
             ));
             continue;
         }
-        for texture in [
-            "clearcoatTexture",
-            "clearcoatRoughnessTexture",
-            "clearcoatNormalTexture",
-        ] {
-            if value.get(texture).is_some() {
-                scene.warnings.push(format!(
-                    "{label}: its {CLEARCOAT} {texture} is not read (the factors are)"
-                ));
-            }
+        if value.get("clearcoatNormalTexture").is_some() {
+            scene.warnings.push(format!(
+                "{label}: its {CLEARCOAT} clearcoatNormalTexture is not read (the coat \
+                 takes the surface's shading normal)"
+            ));
         }
     }
 }
 
 /// The clear coat extension, which the gltf crate does not parse.
 const CLEARCOAT: &str = "KHR_materials_clearcoat";
+
+/// A `textureInfo` of an extension the gltf crate does not parse.
+fn json_info(v: &serde_json::Value) -> std::result::Result<gltf::json::texture::Info, String> {
+    serde_json::from_value(v.clone()).map_err(|e| format!("a {CLEARCOAT} texture info: {e}"))
+}
 
 /// The factors of material `m`'s `KHR_materials_clearcoat` (read from its
 /// JSON; ranges are checked by the mapping); `None` without it.
@@ -466,6 +520,13 @@ pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
         }
         let pbr = &m.pbr_metallic_roughness;
         let specular = m.extensions.as_ref().and_then(|e| e.specular.as_ref());
+        let coat = m.extensions.as_ref().and_then(|e| e.others.get(CLEARCOAT));
+        for key in ["clearcoatTexture", "clearcoatRoughnessTexture"] {
+            if let Some(v) = coat.and_then(|c| c.get(key)) {
+                let info = json_info(v).map_err(|e| Error::InvalidScene(format!("{name}: {e}")))?;
+                check_info(root, &name, &info)?;
+            }
+        }
         for info in [
             &pbr.base_color_texture,
             &pbr.metallic_roughness_texture,

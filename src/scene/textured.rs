@@ -15,7 +15,9 @@
 //! texel sRGB-decoded), metalness = `metallicFactor * texel.b`, roughness =
 //! `roughnessFactor * texel.g` (linear); with `KHR_materials_specular`,
 //! `specularFactor * texel.a` (linear) and `specularColorFactor * texel`
-//! (sRGB-decoded). The base colour texture's alpha does not shade: with
+//! (sRGB-decoded); with `KHR_materials_clearcoat`, `clearcoatFactor *
+//! texel.r` and `clearcoatRoughnessFactor * texel.g` (linear). The base
+//! colour texture's alpha does not shade: with
 //! `alphaMode: MASK` it cuts holes ([`super::alpha`]), where no ray stops.
 //!
 //! A point scatters in its material's class: the textures of a mirror or of
@@ -26,7 +28,7 @@
 use super::normal_map::NormalMap;
 use super::texture::{Encoding, Texture, TextureRef};
 use super::Scene;
-use crate::brdf::{from_gltf_material, Brdf, GltfMaterial, GltfSpecular, Lambert};
+use crate::brdf::{from_gltf_material, Brdf, GltfClearcoat, GltfMaterial, GltfSpecular, Lambert};
 use crate::error::{Error, Result};
 use crate::raycast::Hit;
 use glam::{Vec2, Vec3, Vec4};
@@ -53,6 +55,12 @@ pub struct MaterialMaps {
     pub specular: Option<TextureRef>,
     /// `KHR_materials_specular.specularColorTexture` (sRGB).
     pub specular_color: Option<TextureRef>,
+    /// `KHR_materials_clearcoat.clearcoatTexture` (linear; the weight in
+    /// red).
+    pub clearcoat: Option<TextureRef>,
+    /// `KHR_materials_clearcoat.clearcoatRoughnessTexture` (linear; the
+    /// roughness in green).
+    pub clearcoat_roughness: Option<TextureRef>,
 }
 
 /// The decoded texels a point reads, `ONE` for a texture the material lacks.
@@ -61,6 +69,8 @@ struct Texels {
     metallic_roughness: Vec4,
     specular: Vec4,
     specular_color: Vec4,
+    clearcoat: Vec4,
+    clearcoat_roughness: Vec4,
 }
 
 impl MaterialMaps {
@@ -73,6 +83,8 @@ impl MaterialMaps {
             normal: None,
             specular: None,
             specular_color: None,
+            clearcoat: None,
+            clearcoat_roughness: None,
         }
     }
 
@@ -89,6 +101,8 @@ impl MaterialMaps {
             self.metallic_roughness.as_ref(),
             self.specular.as_ref(),
             self.specular_color.as_ref(),
+            self.clearcoat.as_ref(),
+            self.clearcoat_roughness.as_ref(),
         ]
         .into_iter()
     }
@@ -106,6 +120,8 @@ impl MaterialMaps {
             metallic_roughness: at(&self.metallic_roughness, Encoding::Linear),
             specular: at(&self.specular, Encoding::Linear),
             specular_color: at(&self.specular_color, Encoding::Srgb),
+            clearcoat: at(&self.clearcoat, Encoding::Linear),
+            clearcoat_roughness: at(&self.clearcoat_roughness, Encoding::Linear),
         }
     }
 
@@ -119,6 +135,10 @@ impl MaterialMaps {
             specular: f.specular.map(|s| GltfSpecular {
                 factor: s.factor * t.specular.w,
                 color: s.color * t.specular_color.truncate(),
+            }),
+            clearcoat: f.clearcoat.map(|c| GltfClearcoat {
+                factor: c.factor * t.clearcoat.x,
+                roughness: c.roughness * t.clearcoat_roughness.y,
             }),
             ..*f
         }
@@ -238,9 +258,8 @@ impl Scene {
         // glTF's COLOR_0 multiplies the base colour texel.
         texels.base *= colour.unwrap_or(Vec3::ONE).extend(1.0);
         let base = texels.base;
-        let colour_only = maps.metallic_roughness.is_none()
-            && maps.specular.is_none()
-            && maps.specular_color.is_none();
+        // Only the base colour texture (or COLOR_0) varies.
+        let colour_only = maps.shaping().skip(1).all(|r| r.is_none());
         if colour_only {
             // Only the colour varies, and it does not change which model
             // the factors map to (module docs): the material's model with

@@ -280,7 +280,7 @@ fn blenders_specular_and_clearcoat_reach_the_model_as_blender_means_them() {
 const COAT: &str = "KHR_materials_clearcoat";
 
 #[test]
-fn a_clear_coat_is_read_from_its_factors_and_its_textures_are_named() {
+fn a_clear_coat_is_read_from_its_factors_and_textures() {
     let coated = |coat: Value| {
         let mut m = floor(0.5, 1.0, Value::Null);
         m["extensions"] = json!({ COAT: coat });
@@ -305,14 +305,36 @@ fn a_clear_coat_is_read_from_its_factors_and_its_textures_are_named() {
         pbr(sharp.materials()[0].brdf).clearcoat(),
         (1.0, GltfPbr::MIN_ALPHA)
     );
-    // Its textures are not read: each is named.
-    let mut doc = coated(json!({"clearcoatFactor": 1.0, "clearcoatTexture": {"index": 0}}));
-    doc.texture(
-        &crate::gltf_textures::png_rgb(1, 1, &[[255, 255, 255]]),
-        json!({}),
+    // Its textures multiply the factors where a hit lands: the weight in
+    // red, the roughness in green (linear); its normal texture is named.
+    let mut doc = coated(
+        json!({"clearcoatFactor": 0.8, "clearcoatRoughnessFactor": 0.5,
+        "clearcoatTexture": {"index": 0}, "clearcoatRoughnessTexture": {"index": 0},
+        "clearcoatNormalTexture": {"index": 0}}),
     );
-    let w = load(&doc).warnings().join("\n");
-    assert!(w.contains("clearcoatTexture is not read"), "{w}");
+    let sampler = json!({"magFilter": 9728, "wrapS": 33071, "wrapT": 33071});
+    let png = crate::gltf_textures::png_rgb(2, 1, &[[255, 255, 0], [51, 128, 0]]);
+    doc.texture(&png, sampler);
+    let scene = load(&doc);
+    let w = scene.warnings().join("\n");
+    assert!(w.contains("clearcoatNormalTexture is not read"), "{w}");
+    assert!(!w.contains("clearcoatTexture is"), "{w}");
+    let (lw, la) = pbr(brdf_at(&scene, -1.0, 0.0)).clearcoat();
+    assert!(
+        (lw - 0.8).abs() < 1e-6 && (la - 0.25).abs() < 1e-6,
+        "{lw} {la}"
+    );
+    let (rw, ra) = pbr(brdf_at(&scene, 1.0, 0.0)).clearcoat();
+    let r = 0.5 * 128.0 / 255.0;
+    assert!(
+        (rw - 0.16).abs() < 1e-6 && (ra - r * r).abs() < 1e-6,
+        "{rw} {ra}"
+    );
+    // A clear coat texture naming no texture is refused by name.
+    let e = load_err(&coated(
+        json!({"clearcoatFactor": 1.0, "clearcoatTexture": {"index": 7}}),
+    ));
+    assert!(e.contains("floor") && e.contains("texture 7"), "{e}");
     // Out of range and malformed: refused, naming the material.
     for (coat, what) in [
         (json!({"clearcoatFactor": 1.5}), "clearcoatFactor"),
