@@ -50,7 +50,7 @@ fn brdf_name(b: &Brdf) -> String {
             )
         }
         Brdf::GltfPbr(g) => format!(
-            "gltf-pbr base {} metallic {} alpha {} f0 {}{}",
+            "gltf-pbr base {} metallic {} alpha {} f0 {}{}{}",
             rgb(g.base_color()),
             g.metallic(),
             g.alpha(),
@@ -58,6 +58,10 @@ fn brdf_name(b: &Brdf) -> String {
             match g.dielectric_f90() {
                 1.0 => String::new(),
                 f90 => format!(" f90 {f90}"),
+            },
+            match g.clearcoat() {
+                (0.0, _) => String::new(),
+                (w, a) => format!(" clearcoat {w} alpha {a}"),
             }
         ),
         Brdf::Mirror(m) => format!("mirror {}", rgb(m.reflectance())),
