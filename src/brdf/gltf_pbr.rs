@@ -86,6 +86,12 @@ pub struct GltfPbr {
     // copies, stays within 56 bytes.
 }
 
+/// [`GltfPbr::odds`]: the probabilities of sampling each lobe.
+struct Odds {
+    coat: f32,
+    specular: f32,
+}
+
 /// Schlick's weight `(1 - c)^5`.
 #[inline]
 fn schlick_weight(c: f32) -> f32 {
@@ -303,21 +309,23 @@ impl GltfPbr {
         self.kd() * self.entering(cos_i)
     }
 
-    fn p_spec(&self, cos_i: f32) -> f32 {
-        super::lobe_share(
-            luminance(self.fresnel(cos_i)),
-            luminance(self.albedo_of_base(cos_i)),
-        )
-    }
-
-    /// The probability of sampling the coat: its reflection beside what it
-    /// lets through times the base's lobes' weights.
-    fn p_coat(&self, cos_i: f32) -> f32 {
-        let base = luminance(self.fresnel(cos_i)) + luminance(self.albedo_of_base(cos_i));
-        super::lobe_share(
-            self.coat.reflected(cos_i),
-            self.coat.transmitted(cos_i) * base,
-        )
+    /// The probabilities of sampling, from cosine `cos_i`, the coat (0
+    /// without one: its reflection beside what it lets through times the
+    /// base's lobes' weights) and then the base's specular lobe.
+    fn odds(&self, cos_i: f32) -> Odds {
+        let specular = luminance(self.fresnel(cos_i));
+        let diffuse = luminance(self.albedo_of_base(cos_i));
+        let coat = match self.coat.is_none() {
+            true => 0.0,
+            false => super::lobe_share(
+                self.coat.reflected(cos_i),
+                self.coat.transmitted(cos_i) * (specular + diffuse),
+            ),
+        };
+        Odds {
+            coat,
+            specular: super::lobe_share(specular, diffuse),
+        }
     }
 
     /// Evaluates the BRDF (0 when either direction is below the horizon).
@@ -354,14 +362,16 @@ impl GltfPbr {
             return None;
         }
         let mut u = u;
+        let odds = self.odds(wi.z);
         if !self.coat.is_none() {
-            match super::pick_lobe(u[0], self.p_coat(wi.z)) {
-                (true, u0) => return self.weighted(wi, self.coat.sample_wo(wi, [u0, u[1]])?),
+            match super::pick_lobe(u[0], odds.coat) {
+                (true, u0) => {
+                    return self.weighted(wi, self.coat.sample_wo(wi, [u0, u[1]])?, &odds)
+                }
                 (false, u0) => u[0] = u0,
             }
         }
-        let ps = self.p_spec(wi.z);
-        let wo = match super::pick_lobe(u[0], ps) {
+        let wo = match super::pick_lobe(u[0], odds.specular) {
             (true, u0) => {
                 let m = self.ggx.sample_m(wi, [u0, u[1]]);
                 let im = wi.dot(m);
@@ -372,16 +382,16 @@ impl GltfPbr {
             }
             (false, u0) => cosine_hemisphere([u0, u[1]]),
         };
-        self.weighted(wi, wo)
+        self.weighted(wi, wo, &odds)
     }
 
     /// The sample of direction `wo`, weighted by the whole BRDF and pdf.
-    fn weighted(&self, wi: Vec3, wo: Vec3) -> Option<(BrdfSample, Vec3)> {
+    fn weighted(&self, wi: Vec3, wo: Vec3, odds: &Odds) -> Option<(BrdfSample, Vec3)> {
         if wo.z <= 0.0 {
             return None;
         }
         let f = self.eval(wi, wo);
-        super::weighted_sample(wo, self.pdf(wi, wo), f).map(|s| (s, f))
+        super::weighted_sample(wo, self.pdf_given(wi, wo, odds), f).map(|s| (s, f))
     }
 
     /// Solid-angle pdf of [`GltfPbr::sample`].
@@ -389,7 +399,13 @@ impl GltfPbr {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return 0.0;
         }
-        let ps = self.p_spec(wi.z);
+        self.pdf_given(wi, wo, &self.odds(wi.z))
+    }
+
+    /// [`Self::pdf`] given the lobes' odds at `wi` (both directions above
+    /// the horizon).
+    fn pdf_given(&self, wi: Vec3, wo: Vec3, odds: &Odds) -> f32 {
+        let ps = odds.specular;
         let spec = match (wi + wo).try_normalize() {
             Some(h) if wi.dot(h) > 0.0 => self.ggx.d_visible(wi, h) / (4.0 * wi.dot(h)),
             _ => 0.0,
@@ -398,7 +414,7 @@ impl GltfPbr {
         if self.coat.is_none() {
             return base;
         }
-        let pc = self.p_coat(wi.z);
+        let pc = odds.coat;
         pc * self.coat.pdf(wi, wo) + (1.0 - pc) * base
     }
 
