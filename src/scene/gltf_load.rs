@@ -146,7 +146,7 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
     let mut material_ids = Vec::with_capacity(doc.materials().len());
     // The factors of each, for the maps that vertex colours need.
     let mut material_factors = Vec::with_capacity(doc.materials().len());
-    let mut textures = super::gltf_textures::TextureLoader::new(&doc, &buffers, assets);
+    let mut textures = super::gltf_textures::TextureLoader::new(doc, &buffers, assets);
     for m in doc.materials() {
         let Converted {
             material,
