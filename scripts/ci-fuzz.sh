@@ -18,7 +18,7 @@ cp -n assets/*.gltf tests/hostile/*.gltf tests/gltf/*.gltf "$CORPUS"/ 2>/dev/nul
 # which scripts/test.sh runs first): one seed per feature the tests exercise.
 cp -n target/generated-gltf/*.gltf "$CORPUS"/ 2>/dev/null || true
 # Binary seeds for the compressed-buffer decoders (under -max_len).
-cp -n assets/blender_scene_meshopt*.glb "$CORPUS"/ 2>/dev/null || true
+cp -n assets/blender_scene_meshopt*.glb assets/blender_layers.glb "$CORPUS"/ 2>/dev/null || true
 for f in tests/hostile/fuzz-* tests/hostile/crash-*; do
     [ -e "$f" ] && cp -n "$f" "$CORPUS"/
 done
