@@ -33,35 +33,18 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import blender_scene as base  # noqa: E402
 
 
-def parse_args():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    if len(argv) != 2 or argv[0] != "--out":
-        raise SystemExit("blender_frosted.py: use -- --out FILE.glb")
-    return argv[1]
-
-
-def plane(name, size, material, location, rotation=(0.0, 0.0, 0.0)):
-    mesh = base.primitive(bpy.ops.mesh.primitive_plane_add, size=size)
-    mesh.name = name
-    mesh.materials.append(material)
-    obj = base.mesh_object(name, mesh)
-    obj.location = location
-    obj.rotation_euler = rotation
-    return obj
-
-
 def build():
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = 320, 240
     scene.render.resolution_percentage = 100
 
     floor, _ = base.principled("floor", (0.7, 0.7, 0.7), roughness=1.0)
-    plane("floor", 3.0, floor, (0.0, 0.0, 0.0))
+    base.plane("floor", 3.0, floor, (0.0, 0.0, 0.0))
     frosted, _ = base.principled("frosted", (0.9, 0.95, 1.0), roughness=0.3, transmission=0.5, ior=1.5)
-    plane("pane", 1.2, frosted, (0.0, 0.0, 0.8))
+    base.plane("pane", 1.2, frosted, (0.0, 0.0, 0.8))
 
     panel = base.emission("panel_emission", (1.0, 1.0, 1.0), 20.0)
-    plane("panel", 0.6, panel, (0.2, 0.1, 2.0), (math.pi, 0.0, 0.0))
+    base.plane("panel", 0.6, panel, (0.2, 0.1, 2.0), (math.pi, 0.0, 0.0))
 
     cam = bpy.data.cameras.new("camera")
     cam.lens, cam.sensor_width = 35.0, 36.0
@@ -74,7 +57,7 @@ def build():
 
 
 def main():
-    out = parse_args()
+    out = base.out_arg("blender_frosted.py")
     base.clear_scene()
     build()
     base.export(out)

@@ -43,23 +43,6 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import blender_scene as base  # noqa: E402
 
 
-def parse_args():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    if len(argv) != 2 or argv[0] != "--out":
-        raise SystemExit("blender_layers.py: use -- --out FILE.glb")
-    return argv[1]
-
-
-def plane(name, size, material, location, rotation=(0.0, 0.0, 0.0)):
-    mesh = base.primitive(bpy.ops.mesh.primitive_plane_add, size=size)
-    mesh.name = name
-    mesh.materials.append(material)
-    obj = base.mesh_object(name, mesh)
-    obj.location = location
-    obj.rotation_euler = rotation
-    return obj
-
-
 def specular(name, colour, roughness, spec, tint=0.0, ior=1.5):
     mat, bsdf = base.principled(name, colour, roughness=roughness, ior=ior)
     bsdf.inputs["Specular"].default_value = spec
@@ -72,18 +55,18 @@ def build():
     scene.render.resolution_x, scene.render.resolution_y = 320, 240
     scene.render.resolution_percentage = 100
 
-    plane("floor", 3.0, specular("floor", (0.6, 0.6, 0.6), 0.5, 0.25), (0.0, 0.0, 0.0))
+    base.plane("floor", 3.0, specular("floor", (0.6, 0.6, 0.6), 0.5, 0.25), (0.0, 0.0, 0.0))
     tinted = specular("tinted", (0.8, 0.3, 0.1), 0.4, 1.0, tint=0.5, ior=1.45)
-    plane("tinted", 1.0, tinted, (-0.6, 0.0, 0.5))
-    plane("matte", 1.0, specular("matte", (0.5, 0.5, 0.5), 1.0, 0.0), (0.6, 0.0, 0.3))
-    plane("plain", 1.0, specular("plain", (0.5, 0.5, 0.5), 0.5, 0.5), (0.0, 0.8, 0.7))
+    base.plane("tinted", 1.0, tinted, (-0.6, 0.0, 0.5))
+    base.plane("matte", 1.0, specular("matte", (0.5, 0.5, 0.5), 1.0, 0.0), (0.6, 0.0, 0.3))
+    base.plane("plain", 1.0, specular("plain", (0.5, 0.5, 0.5), 0.5, 0.5), (0.0, 0.8, 0.7))
     lacquer, bsdf = base.principled("lacquer", (0.6, 0.05, 0.05), roughness=0.5, ior=1.5)
     bsdf.inputs["Clearcoat"].default_value = 1.0
     bsdf.inputs["Clearcoat Roughness"].default_value = 0.1
-    plane("lacquer", 1.0, lacquer, (0.0, -0.8, 0.9))
+    base.plane("lacquer", 1.0, lacquer, (0.0, -0.8, 0.9))
 
     panel = base.emission("panel_emission", (1.0, 1.0, 1.0), 20.0)
-    plane("panel", 0.6, panel, (0.2, 0.1, 2.0), (math.pi, 0.0, 0.0))
+    base.plane("panel", 0.6, panel, (0.2, 0.1, 2.0), (math.pi, 0.0, 0.0))
 
     cam = bpy.data.cameras.new("camera")
     cam.lens, cam.sensor_width = 35.0, 36.0
@@ -96,7 +79,7 @@ def build():
 
 
 def main():
-    out = parse_args()
+    out = base.out_arg("blender_layers.py")
     base.clear_scene()
     build()
     base.export(out)

@@ -150,6 +150,26 @@ def primitive(op, **kw):
     return mesh
 
 
+def plane(name, size, material, location, rotation=(0.0, 0.0, 0.0)):
+    """A size x size plane of `material`, placed and turned (Euler XYZ)."""
+    mesh = primitive(bpy.ops.mesh.primitive_plane_add, size=size)
+    mesh.name = name
+    mesh.materials.append(material)
+    obj = mesh_object(name, mesh)
+    obj.location = location
+    obj.rotation_euler = rotation
+    return obj
+
+
+def out_arg(script):
+    """The FILE of `-- --out FILE.glb`, the one argument of the scripts that
+    reuse these helpers (`script` names the caller in the usage message)."""
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    if len(argv) != 2 or argv[0] != "--out":
+        raise SystemExit(f"{script}: use -- --out FILE.glb")
+    return argv[1]
+
+
 def uv_sphere(name, radius, segments, rings):
     """A UV sphere built vertex by vertex: bpy.ops.mesh.primitive_uv_sphere_add
     (bmesh) orders its faces differently from one run to the next, which changes

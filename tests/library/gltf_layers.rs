@@ -13,32 +13,18 @@ use glam::Vec3;
 use serde_json::{json, Value};
 
 use crate::common;
-use crate::gltf_doc::{square, Doc};
+use crate::gltf_alpha_mask::{load, load_err, png_rgba};
+use crate::gltf_doc::Doc;
 use crate::gltf_textures::reflected_up;
 
 const EXT: &str = "KHR_materials_specular";
 
-/// A 4 x 4 floor of material `floor` facing up at y = 0, texture
-/// coordinates (0, 0) to (1, 1) across it; a lamp facing down at y = 1; a
-/// black ceiling at y = 1.5 that records what the floor reflects up.
+/// The floor of `gltf_textures`' scenes in material `floor`, its lamp, and
+/// the black ceiling that records what the floor reflects up; the document
+/// uses `KHR_materials_specular`.
 fn floor_scene(floor: Value) -> Doc {
-    let mut doc = Doc::default();
+    let mut doc = crate::gltf_textures::floor_scene(None, floor, true);
     doc.extensions_used.push(EXT);
-    let floor_m = doc.material(floor);
-    let lamp = doc.material(json!({"name": "lamp", "emissiveFactor": [1.0, 1.0, 1.0],
-        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0}}));
-    let black = doc.material(json!({"name": "black",
-        "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0}}));
-    let (p, i) = square(2.0, true);
-    let f = doc.mesh(&p, &i, 4, Some(floor_m));
-    doc.texcoords(f, &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
-    doc.node(json!({ "mesh": f }));
-    let (p, i) = square(0.5, false);
-    let l = doc.mesh(&p, &i, 4, Some(lamp));
-    doc.node(json!({"mesh": l, "translation": [0.0, 1.0, 0.0]}));
-    let (p, i) = square(2.0, false);
-    let c = doc.mesh(&p, &i, 4, Some(black));
-    doc.node(json!({"mesh": c, "translation": [0.0, 1.5, 0.0]}));
     doc
 }
 
@@ -52,16 +38,6 @@ fn floor(base: f32, roughness: f32, specular: Value) -> Value {
         m["extensions"] = json!({ EXT: specular });
     }
     m
-}
-
-fn load(doc: &Doc) -> Scene {
-    let dir = tempfile::tempdir().unwrap();
-    Scene::load(doc.write(dir.path())).unwrap()
-}
-
-fn load_err(doc: &Doc) -> String {
-    let dir = tempfile::tempdir().unwrap();
-    Scene::load(doc.write(dir.path())).unwrap_err().to_string()
 }
 
 /// The BRDF at the floor point straight below (x, z).
@@ -155,17 +131,6 @@ fn photons_reflect_by_the_specular_factors() {
         (o - p).abs() > 4.0 * se,
         "the extension changes what the floor reflects: {o} vs {p} (se {se})"
     );
-}
-
-/// An 8-bit RGBA PNG of `w x h` pixels.
-fn png_rgba(w: u32, h: u32, rgba: &[[u8; 4]]) -> Vec<u8> {
-    let mut out = Vec::new();
-    let mut enc = png::Encoder::new(&mut out, w, h);
-    enc.set_color(png::ColorType::Rgba);
-    enc.set_depth(png::BitDepth::Eight);
-    let data: Vec<u8> = rgba.iter().flatten().copied().collect();
-    enc.write_header().unwrap().write_image_data(&data).unwrap();
-    out
 }
 
 #[test]

@@ -44,7 +44,7 @@ fn four_colours() -> Vec<u8> {
 /// y = 1; and, when `ceiling`, a black ceiling facing down at y = 1.5 that
 /// records the photons the floor reflects up. `floor` is the floor's
 /// material JSON; the texture, when given, is texture 0.
-fn floor_scene(texture: Option<(&[u8], &str)>, floor: Value, ceiling: bool) -> Doc {
+pub(crate) fn floor_scene(texture: Option<(&[u8], &str)>, floor: Value, ceiling: bool) -> Doc {
     let mut doc = Doc::default();
     if let Some((png, sampler)) = texture {
         doc.texture(png, serde_json::from_str(sampler).unwrap());
