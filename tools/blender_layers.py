@@ -32,12 +32,10 @@ The scene (Blender is Z-up; the exporter writes glTF's Y-up), in metres:
   Emission shader of strength 20;
 - a perspective camera at a 3/4 view from 2.2 m high.
 """
-import math
 import os
 import sys
 
 import bpy
-from mathutils import Vector
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import blender_scene as base  # noqa: E402
@@ -65,25 +63,7 @@ def build():
     bsdf.inputs["Clearcoat Roughness"].default_value = 0.1
     base.plane("lacquer", 1.0, lacquer, (0.0, -0.8, 0.9))
 
-    panel = base.emission("panel_emission", (1.0, 1.0, 1.0), 20.0)
-    base.plane("panel", 0.6, panel, (0.2, 0.1, 2.0), (math.pi, 0.0, 0.0))
-
-    cam = bpy.data.cameras.new("camera")
-    cam.lens, cam.sensor_width = 35.0, 36.0
-    cam_obj = base.link(bpy.data.objects.new("camera", cam))
-    cam_obj.location = Vector((2.2, -2.0, 2.2))
-    target = Vector((0.0, 0.0, 0.3))
-    cam_obj.rotation_euler = (target - cam_obj.location).to_track_quat("-Z", "Y").to_euler()
-    scene.camera = cam_obj
-    bpy.context.view_layer.update()
+    base.panel_and_camera(scene)
 
 
-def main():
-    out = base.out_arg("blender_layers.py")
-    base.clear_scene()
-    build()
-    base.export(out)
-    print(f"blender_layers.py: wrote {out}")
-
-
-main()
+base.export_built("blender_layers.py", build)

@@ -170,6 +170,31 @@ def out_arg(script):
     return argv[1]
 
 
+def panel_and_camera(scene):
+    """The small scenes' light and view: a 0.6 m emitting panel 2 m up, face
+    down (a bare Emission shader of strength 20), and a 35 mm camera at a 3/4
+    view from 2.2 m high, looking at (0, 0, 0.3)."""
+    panel = emission("panel_emission", (1.0, 1.0, 1.0), 20.0)
+    plane("panel", 0.6, panel, (0.2, 0.1, 2.0), (math.pi, 0.0, 0.0))
+    cam = bpy.data.cameras.new("camera")
+    cam.lens, cam.sensor_width = 35.0, 36.0
+    cam_obj = link(bpy.data.objects.new("camera", cam))
+    cam_obj.location = Vector((2.2, -2.0, 2.2))
+    target = Vector((0.0, 0.0, 0.3))
+    cam_obj.rotation_euler = (target - cam_obj.location).to_track_quat("-Z", "Y").to_euler()
+    scene.camera = cam_obj
+    bpy.context.view_layer.update()
+
+
+def export_built(script, build):
+    """Clears the scene, runs `build`, exports to the `--out` file."""
+    out = out_arg(script)
+    clear_scene()
+    build()
+    export(out)
+    print(f"{script}: wrote {out}")
+
+
 def uv_sphere(name, radius, segments, rings):
     """A UV sphere built vertex by vertex: bpy.ops.mesh.primitive_uv_sphere_add
     (bmesh) orders its faces differently from one run to the next, which changes
