@@ -61,7 +61,9 @@ impl Coat {
         };
         let c = wi.dot(h).clamp(0.0, 1.0);
         let fresnel = COAT_F0 + (1.0 - COAT_F0) * (1.0 - c).powi(5);
-        let lobe = self.ggx.d(h) * self.ggx.g(wi, wo) / (4.0 * wi.z * wo.z);
+        // The floor keeps two cosines that underflow from giving 0 / 0.
+        let cosines = (4.0 * wi.z * wo.z).max(f32::MIN_POSITIVE);
+        let lobe = self.ggx.d(h) * self.ggx.g(wi, wo) / cosines;
         self.weight * fresnel * lobe
     }
 
@@ -88,13 +90,12 @@ impl Coat {
         self.weight * (COAT_F0 * e.shadowed + (1.0 - COAT_F0) * e.shadowed_schlick)
     }
 
-    /// `integral e(mu) T(mu) 2 mu dmu` per channel, for a base whose
-    /// entering share is `e`: the midpoint rule on 256 cells (the tables
-    /// are piecewise linear in `mu` on 31 segments, so the product is
-    /// smooth within each cell).
-    pub(crate) fn cosine_weighted_through(&self, e: impl Fn(f32) -> Vec3) -> Vec3 {
+    /// `integral e(mu) T(mu) 2 mu dmu`, for a base whose entering share is
+    /// `e`: the midpoint rule on 256 cells (the tables are piecewise linear
+    /// in `mu` on 31 segments, so the product is smooth within each cell).
+    pub(crate) fn cosine_weighted_through(&self, e: impl Fn(f32) -> f32) -> f32 {
         const N: usize = 256;
-        let mut sum = Vec3::ZERO;
+        let mut sum = 0.0;
         for k in 0..N {
             let mu = (k as f32 + 0.5) / N as f32;
             sum += e(mu) * (self.transmitted(mu) * 2.0 * mu);

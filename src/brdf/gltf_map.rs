@@ -21,8 +21,9 @@
 //! `f0_d = min(((ior - 1) / (ior + 1))^2 c, 1) s` per channel and the
 //! grazing reflectance `f90_d = s` (1 without the extension). The metal's
 //! Fresnel is not touched (`f90 = mix(f90_d, 1, metallic)`), and the
-//! diffuse base takes what the coloured `E_F` leaves, channel by channel
-//! ([`GltfPbr`]). `s = 0` turns the dielectric's reflection off: its base
+//! diffuse base takes what the strongest channel of the reflection leaves,
+//! as the extension's `1 - max_value(F)` does ([`GltfPbr`]): a coloured
+//! specular does not tint the base. `s = 0` turns the dielectric's reflection off: its base
 //! then reflects all of `base_color`. The extension's textures multiply
 //! the factors (`specularTexture`'s alpha, `specularColorTexture`'s sRGB
 //! colour) where the scene loader reads them.
@@ -30,9 +31,11 @@
 //! `KHR_materials_clearcoat` puts a clear coat of weight `clearcoatFactor`
 //! and GGX `alpha = clearcoatRoughnessFactor^2` (clamped below at
 //! [`GltfPbr::MIN_ALPHA`]) over the opaque material
-//! ([`GltfPbr::with_clearcoat`], `brdf/gltf_coat.rs`). A coated material is
-//! always [`GltfPbr`]: neither special case below applies to it (a coated
-//! polished metal is the sharpest metal lobe under its coat, not a mirror).
+//! ([`GltfPbr::with_clearcoat`], `brdf/gltf_coat.rs`). A coated matte
+//! dielectric is [`GltfPbr`], not [`Lambert`]; a coated polished metal stays
+//! a [`Mirror`], its coat dropped (the scene loader warns): a glossy lobe of
+//! alpha 1e-3 in its place would store photons on a mirror and weight them
+//! by its sharp peak.
 //! Beckmann [`super::CookTorrance`] is not used for glTF materials (it stays
 //! available to code and to `adaptive-pm analyze`).
 //!
@@ -459,7 +462,7 @@ fn opaque(
 ) -> Result<Brdf> {
     let alpha = roughness * roughness;
     let coated = coat.factor > 0.0;
-    if metallic == 1.0 && alpha < GltfPbr::MIN_ALPHA && !coated {
+    if metallic == 1.0 && alpha < GltfPbr::MIN_ALPHA {
         return Ok(Mirror::new(base_color)?.into());
     }
     if metallic == 0.0 && roughness == 1.0 && f0_d.max_element() <= 0.04 && !coated {

@@ -18,7 +18,7 @@
 //! F        = f0 + (f90 - f0) w                     (Schlick, per channel)
 //! specular = F D(h) G(wi, wo) / (4 cos_i cos_o)
 //! diffuse  = base_color (1 - metallic) / pi
-//!            (1 - E_F(cos_i)) (1 - E_F(cos_o)) / (1 - E_avg)   (per channel)
+//!            (1 - E_F(cos_i)) (1 - E_F(cos_o)) / (1 - E_avg)
 //! f_r      = diffuse + specular
 //! ```
 //! This is the specification's `mix(dielectric_brdf, metal_brdf, metallic)`:
@@ -40,8 +40,11 @@
 //! energy conserving", and names couplings that are; this is Kulla and
 //! Conty's (2017): `E_F(mu)` is the fraction of the light arriving at cosine
 //! `mu` that the dielectric's facets (`f0_d`, `f90_d`) reflect at first
-//! contact, `f0_d + (f90_d - f0_d) W(mu)` per channel, with `W` the mean
-//! Schlick weight of the normals
+//! contact, `f0_d + (f90_d - f0_d) W(mu)` for the strongest channel of a
+//! coloured `f0_d` (the specification's `1 - max_value(F)` weight on the
+//! base, so that a coloured specular does not tint it, and the lobe, which
+//! reflects at most that in any channel, leaves the albedo at most 1), with
+//! `W` the mean Schlick weight of the normals
 //! visible from that direction, and `E_avg` its cosine-weighted hemispherical
 //! average; both are tabulated once over `mu` and the roughness
 //! (`brdf/ggx_energy.rs`). The base then reflects exactly
@@ -81,13 +84,12 @@ pub struct GltfPbr {
     f90_d: f32,
     /// `KHR_materials_clearcoat` ([`Coat::NONE`] without it).
     coat: Coat,
-    /// `1 / (pi (1 - E_avg))` per channel, 0 in a channel no light enters
-    /// (`E_avg = 1`), and in all when the base has no colour (a metal):
-    /// stored, as every diffuse evaluation needs it (computed there, it
-    /// cost the analysis of a glTF material 5-9 %). The lobe's `f0` and
-    /// `f90` and the base's `kd`, a few products each, are computed where
-    /// used, so that `Brdf`, which every hit copies, stays within 64 bytes.
-    base_scale: Vec3,
+    /// `1 / (pi (1 - E_avg))` of the strongest channel, 0 when no light
+    /// enters (`E_avg = 1`) or the base has no colour (a metal): stored, as
+    /// every diffuse evaluation needs it. The lobe's `f0` and `f90` and the
+    /// base's `kd`, a few products each, are computed where used, so that
+    /// `Brdf`, which every hit copies, stays small.
+    base_scale: f32,
 }
 
 /// [`GltfPbr::odds`]: the probabilities of sampling each lobe.
@@ -165,7 +167,7 @@ impl GltfPbr {
             f0_d,
             f90_d,
             coat: Coat::NONE,
-            base_scale: Vec3::ZERO,
+            base_scale: 0.0,
         };
         b.base_scale = b.base_scale_of();
         b
@@ -207,21 +209,17 @@ impl GltfPbr {
     }
 
     /// [`GltfPbr::base_scale`] of the other parameters.
-    fn base_scale_of(&self) -> Vec3 {
+    fn base_scale_of(&self) -> f32 {
         if self.kd().max_element() <= 0.0 {
-            return Vec3::ZERO;
+            return 0.0;
         }
-        let w_avg = average_schlick_weight(self.ggx.alpha);
-        let scale = |f0: f32| {
-            let rest = 1.0 - (f0 + (self.f90_d - f0) * w_avg);
-            if rest > 0.0 {
-                FRAC_1_PI / rest
-            } else {
-                0.0
-            }
-        };
-        let f0 = self.f0_d;
-        Vec3::new(scale(f0.x), scale(f0.y), scale(f0.z))
+        let f0 = self.f0_d.max_element();
+        let rest = 1.0 - (f0 + (self.f90_d - f0) * average_schlick_weight(self.ggx.alpha));
+        if rest > 0.0 {
+            FRAC_1_PI / rest
+        } else {
+            0.0
+        }
     }
 
     /// The same model with another base colour (a texel's), each channel
@@ -291,26 +289,27 @@ impl GltfPbr {
         f0 + (Vec3::splat(self.f90()) - f0) * schlick_weight(c)
     }
 
-    /// `1 - E_F(mu)` per channel: the share of the light arriving at cosine
-    /// `mu` that enters the dielectric base.
-    fn entering(&self, mu: f32) -> Vec3 {
+    /// `1 - E_F(mu)`: the share of the light arriving at cosine `mu` that
+    /// enters the dielectric base, by the strongest channel of a coloured
+    /// `f0_d` (the specification's `1 - max_value(F)`: the base is not
+    /// tinted by the complement of the specular colour).
+    fn entering(&self, mu: f32) -> f32 {
+        let f0 = self.f0_d.max_element();
         let w = schlick_energy_weight(mu, self.ggx.alpha);
-        let e = self.f0_d + (Vec3::splat(self.f90_d) - self.f0_d) * w;
-        (Vec3::ONE - e).max(Vec3::ZERO)
+        (1.0 - (f0 + (self.f90_d - f0) * w)).max(0.0)
     }
 
     /// The diffuse base's value for a pair of cosines (module docs).
     fn diffuse(&self, cos_i: f32, cos_o: f32) -> Vec3 {
-        let scale = self.base_scale;
-        if scale == Vec3::ZERO {
+        if self.base_scale == 0.0 {
             return Vec3::ZERO;
         }
-        self.kd() * (self.entering(cos_i) * self.entering(cos_o) * scale)
+        self.kd() * (self.entering(cos_i) * self.entering(cos_o) * self.base_scale)
     }
 
     /// The base's albedo `kd (1 - E_F(cos_i))`.
     fn albedo_of_base(&self, cos_i: f32) -> Vec3 {
-        if self.kd().max_element() <= 0.0 {
+        if self.base_scale == 0.0 {
             return Vec3::ZERO;
         }
         self.kd() * self.entering(cos_i)
@@ -354,7 +353,9 @@ impl GltfPbr {
         let Some(h) = (wi + wo).try_normalize() else {
             return Vec3::ZERO;
         };
-        let lobe = self.ggx.d(h) * self.ggx.g(wi, wo) / (4.0 * wi.z * wo.z);
+        // The floor keeps two cosines that underflow from giving 0 / 0.
+        let cosines = (4.0 * wi.z * wo.z).max(f32::MIN_POSITIVE);
+        let lobe = self.ggx.d(h) * self.ggx.g(wi, wo) / cosines;
         self.fresnel(wi.dot(h)) * lobe
     }
 
@@ -608,6 +609,23 @@ mod tests {
                 let (a, r) = (b.eval(l, v), b.eval(v, l));
                 assert!((a - r).abs().max_element() <= 1e-5 * a.max_element().max(1.0));
             }
+        }
+    }
+
+    #[test]
+    fn a_coloured_specular_does_not_tint_the_base() {
+        // The specification's 1 - max_value(F): a white base under a red
+        // specular of f0 (1, 0, 0) is black, not cyan; under (0.3, 0.1,
+        // 0.05) it is grey, as under a grey f0 of 0.3.
+        let red = GltfPbr::with_specular(Vec3::ONE, 0.0, 0.25, Vec3::X, 1.0).unwrap();
+        assert_eq!(red.diffuse(0.7, 0.4), Vec3::ZERO);
+        let f0 = Vec3::new(0.3, 0.1, 0.05);
+        let warm = GltfPbr::with_specular(Vec3::ONE, 0.0, 0.25, f0, 1.0).unwrap();
+        let grey = GltfPbr::with_specular(Vec3::ONE, 0.0, 0.25, Vec3::splat(0.3), 1.0).unwrap();
+        for (ci, co) in [(0.9f32, 0.2f32), (0.5, 0.5), (0.05, 0.8)] {
+            let d = warm.diffuse(ci, co);
+            assert!(d.x == d.y && d.y == d.z, "{d}");
+            assert_eq!(d, grey.diffuse(ci, co));
         }
     }
 

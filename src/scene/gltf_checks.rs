@@ -71,12 +71,13 @@ pub(super) fn multiplicity(t: Type) -> u64 {
 /// The extensions a file may require: those the loader reads, and
 /// `KHR_texture_basisu`, whose textures (with no PNG, JPEG or WebP image)
 /// load with their factors alone and a warning.
-const SUPPORTED_REQUIRED: [&str; 13] = [
+const SUPPORTED_REQUIRED: [&str; 14] = [
     "KHR_lights_punctual",
     super::gltf_meshopt::EXT_MESHOPT_COMPRESSION,
     super::gltf_meshopt::KHR_MESHOPT_COMPRESSION,
     super::gltf_instancing::EXT_MESH_GPU_INSTANCING,
     super::gltf_quantized::KHR_MESH_QUANTIZATION,
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_specular",

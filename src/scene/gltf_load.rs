@@ -154,7 +154,7 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
             transmitted,
         } = convert_material(&m)?;
         let specular = material.brdf.is_specular();
-        warn_specular_on_glass(&m, &material.brdf, transmitted.is_some(), &mut scene);
+        warn_unmodelled_layers(&m, &material.brdf, transmitted.is_some(), &mut scene);
         let id = scene.add_material(material);
         if let Some((weight, glass)) = transmitted {
             scene.set_transmission_mix(id, weight, glass)?;
@@ -463,15 +463,24 @@ fn load_mesh(
     Ok(())
 }
 
-/// Warns when `KHR_materials_specular` would change the Fresnel term of a
-/// material's glass part, which keeps its IOR's exact one
-/// (`brdf/gltf_map.rs`).
-fn warn_specular_on_glass(m: &gltf::Material, brdf: &Brdf, partly: bool, scene: &mut Scene) {
+/// Warns of the layers a material's model leaves out (`brdf/gltf_map.rs`):
+/// `KHR_materials_specular` on its glass part, which keeps its IOR's exact
+/// Fresnel term, and a clear coat on glass or on a polished metal (a
+/// mirror).
+fn warn_unmodelled_layers(m: &gltf::Material, brdf: &Brdf, partly: bool, scene: &mut Scene) {
+    let label = super::gltf_textures::material_label(m);
+    let coated =
+        super::gltf_textures::clearcoat_of(m).is_ok_and(|c| c.is_some_and(|c| c.factor > 0.0));
+    if coated && matches!(brdf, Brdf::Mirror(_)) {
+        scene.warnings.push(format!(
+            "{label}: KHR_materials_clearcoat is not modelled on a polished metal, which is \
+             traced as a mirror"
+        ));
+    }
     let glass = partly || matches!(brdf, Brdf::Dielectric(_) | Brdf::RoughDielectric(_));
     if !glass {
         return;
     }
-    let label = super::gltf_textures::material_label(m);
     let changes = m.specular().is_some_and(|s| {
         s.specular_factor() != 1.0
             || s.specular_color_factor() != [1.0; 3]
@@ -484,8 +493,6 @@ fn warn_specular_on_glass(m: &gltf::Material, brdf: &Brdf, partly: bool, scene: 
              which reflects by its IOR's Fresnel term"
         ));
     }
-    let coated =
-        super::gltf_textures::clearcoat_of(m).is_ok_and(|c| c.is_some_and(|c| c.factor > 0.0));
     if coated {
         scene.warnings.push(format!(
             "{label}: KHR_materials_clearcoat is not modelled on its transmitting (glass) part"

@@ -300,6 +300,30 @@ fn a_clear_coat_is_read_from_its_factors_and_textures() {
         json!({"clearcoatFactor": 1.0, "clearcoatTexture": {"index": 7}}),
     ));
     assert!(e.contains("floor") && e.contains("texture 7"), "{e}");
+    // A polished metal stays a mirror; its coat is named as not modelled.
+    let mut m = floor(0.9, 0.0, Value::Null);
+    m["pbrMetallicRoughness"]["metallicFactor"] = json!(1.0);
+    m["extensions"] = json!({ COAT: {"clearcoatFactor": 1.0} });
+    let mut doc = floor_scene(m);
+    doc.extensions_used.push(COAT);
+    let scene = load(&doc);
+    assert!(matches!(scene.materials()[0].brdf, Brdf::Mirror(_)));
+    let w = scene.warnings().join("\n");
+    assert!(w.contains("not modelled on a polished metal"), "{w}");
+    // A file may require the extension.
+    let doc = coated(json!({"clearcoatFactor": 0.5}));
+    let dir = tempfile::tempdir().unwrap();
+    let path = doc.write(dir.path());
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    v["extensionsRequired"] = json!([COAT]);
+    v["extensionsUsed"] = json!([EXT, COAT]);
+    std::fs::write(&path, v.to_string()).unwrap();
+    assert_eq!(
+        pbr(Scene::load(&path).unwrap().materials()[0].brdf)
+            .clearcoat()
+            .0,
+        0.5
+    );
     // Out of range and malformed: refused, naming the material.
     for (coat, what) in [
         (json!({"clearcoatFactor": 1.5}), "clearcoatFactor"),
