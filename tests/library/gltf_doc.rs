@@ -83,15 +83,24 @@ impl Doc {
         self.meshes.len() - 1
     }
 
+    /// Adds float attribute `name` (`VECn`, `n = N`) to primitive 0 of
+    /// mesh `mesh`.
+    fn float_attribute<const N: usize>(&mut self, mesh: usize, name: &str, values: &[[f32; N]]) {
+        let bytes: Vec<u8> = values
+            .iter()
+            .flatten()
+            .flat_map(|c| c.to_le_bytes())
+            .collect();
+        let v = self.view(&bytes);
+        self.accessors
+            .push(json!({"bufferView": v, "componentType": 5126,
+            "count": values.len(), "type": format!("VEC{N}")}));
+        self.meshes[mesh]["primitives"][0]["attributes"][name] = json!(self.accessors.len() - 1);
+    }
+
     /// Adds `TEXCOORD_0` values to primitive 0 of mesh `mesh`.
     pub(crate) fn texcoords(&mut self, mesh: usize, uvs: &[[f32; 2]]) {
-        let bytes: Vec<u8> = uvs.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
-        let v = self.view(&bytes);
-        self.accessors.push(
-            json!({"bufferView": v, "componentType": 5126, "count": uvs.len(), "type": "VEC2"}),
-        );
-        self.meshes[mesh]["primitives"][0]["attributes"]["TEXCOORD_0"] =
-            json!(self.accessors.len() - 1);
+        self.float_attribute(mesh, "TEXCOORD_0", uvs);
     }
 
     /// Adds `COLOR_0` to primitive 0 of mesh `mesh`: normalized
@@ -107,15 +116,15 @@ impl Doc {
             json!(self.accessors.len() - 1);
     }
 
+    /// Adds `NORMAL` values to primitive 0 of mesh `mesh` (what the
+    /// validator asks of a primitive whose material has a normal texture).
+    pub(crate) fn normals(&mut self, mesh: usize, n: &[[f32; 3]]) {
+        self.float_attribute(mesh, "NORMAL", n);
+    }
+
     /// Adds `TANGENT` values to primitive 0 of mesh `mesh`.
     pub(crate) fn tangents(&mut self, mesh: usize, t: &[[f32; 4]]) {
-        let bytes: Vec<u8> = t.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
-        let v = self.view(&bytes);
-        self.accessors.push(
-            json!({"bufferView": v, "componentType": 5126, "count": t.len(), "type": "VEC4"}),
-        );
-        self.meshes[mesh]["primitives"][0]["attributes"]["TANGENT"] =
-            json!(self.accessors.len() - 1);
+        self.float_attribute(mesh, "TANGENT", t);
     }
 
     /// Adds a texture of the PNG `png` read through sampler `sampler` (a

@@ -280,6 +280,10 @@ fn a_clear_coat_is_read_from_its_factors_and_textures() {
     let sampler = json!({"magFilter": 9728, "wrapS": 33071, "wrapT": 33071});
     let png = crate::gltf_textures::png_rgb(2, 1, &[[255, 255, 0], [51, 128, 0]]);
     doc.texture(&png, sampler);
+    // The coat's normal texture asks the primitive for a tangent space
+    // (the validator's rule; no core normal texture would make one).
+    doc.normals(0, &[[0.0, 1.0, 0.0]; 4]);
+    doc.tangents(0, &[[1.0, 0.0, 0.0, 1.0]; 4]);
     let scene = load(&doc);
     let w = scene.warnings().join("\n");
     assert!(w.contains("clearcoatNormalTexture is not read"), "{w}");
