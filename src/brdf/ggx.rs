@@ -96,6 +96,32 @@ impl Ggx {
         g1_wi * d_m * im.abs() / wi.z.abs()
     }
 
+    /// The reflection lobe `D(h) G(wi, wo) / (4 cos_i cos_o)` (both
+    /// directions above the horizon) and its half vector `h`; `None` when
+    /// `wi + wo` has no direction. The cosines' product is floored so that
+    /// two that underflow do not give 0 / 0.
+    pub(crate) fn reflection(&self, wi: Vec3, wo: Vec3) -> Option<(f32, Vec3)> {
+        let h = (wi + wo).try_normalize()?;
+        let cosines = (4.0 * wi.z * wo.z).max(f32::MIN_POSITIVE);
+        Some((self.d(h) * self.g(wi, wo) / cosines, h))
+    }
+
+    /// A direction reflected about a normal drawn from [`Self::d_visible`];
+    /// `None` when the normal faces away from `wi`.
+    pub(crate) fn sample_reflection(&self, wi: Vec3, u: [f32; 2]) -> Option<Vec3> {
+        let m = self.sample_m(wi, u);
+        let im = wi.dot(m);
+        (im > 0.0).then(|| (2.0 * im * m - wi).normalize())
+    }
+
+    /// Solid-angle pdf of [`Self::sample_reflection`]: `D_wi(h) / (4 wi.h)`.
+    pub(crate) fn reflection_pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+        match (wi + wo).try_normalize() {
+            Some(h) if wi.dot(h) > 0.0 => self.d_visible(wi, h) / (4.0 * wi.dot(h)),
+            _ => 0.0,
+        }
+    }
+
     /// A microfacet normal drawn from [`Self::d_visible`] (pbrt-v4
     /// `Sample_wm`, isotropic): a uniform disk point warped onto the
     /// projected visible hemisphere of the stretched `wi` (of `-wi` when
@@ -169,6 +195,12 @@ impl Ggx {
             schlick: (w_all / n) as f32,
         }
     }
+}
+
+/// Schlick's weight `(1 - c)^5` (`c` clamped to [0, 1]).
+#[inline]
+pub(crate) fn schlick_weight(c: f32) -> f32 {
+    (1.0 - c.clamp(0.0, 1.0)).powi(5)
 }
 
 /// [`Ggx::visible_frame`]: the stretched `wi` (turned to +z) and two

@@ -18,7 +18,7 @@
 //! light (its masking loses some) and the base at most what the coat lets
 //! through, `T(cos_i)` of it times an albedo at most 1.
 
-use super::ggx::Ggx;
+use super::ggx::{schlick_weight, Ggx};
 use super::ggx_energy::schlick_energy_weight;
 use glam::Vec3;
 
@@ -43,44 +43,31 @@ impl Coat {
         self.weight == 0.0
     }
 
+    /// `(c E_c(mu), T(mu))`: what the coat reflects at first contact, and
+    /// what it lets through.
+    pub(crate) fn reflected_and_transmitted(&self, mu: f32) -> (f32, f32) {
+        let r = self.reflected(mu);
+        (r, (1.0 - r).max(0.0))
+    }
+
     /// `c E_c(mu)`: what the coat reflects at first contact.
-    pub(crate) fn reflected(&self, mu: f32) -> f32 {
+    fn reflected(&self, mu: f32) -> f32 {
         let w = schlick_energy_weight(mu, self.ggx.alpha);
         self.weight * (COAT_F0 + (1.0 - COAT_F0) * w)
     }
 
     /// `T(mu) = 1 - c E_c(mu)`: what passes through the coat.
     pub(crate) fn transmitted(&self, mu: f32) -> f32 {
-        (1.0 - self.reflected(mu)).max(0.0)
+        self.reflected_and_transmitted(mu).1
     }
 
     /// The coat's lobe (both directions above the horizon).
     pub(crate) fn eval(&self, wi: Vec3, wo: Vec3) -> f32 {
-        let Some(h) = (wi + wo).try_normalize() else {
+        let Some((lobe, h)) = self.ggx.reflection(wi, wo) else {
             return 0.0;
         };
-        let c = wi.dot(h).clamp(0.0, 1.0);
-        let fresnel = COAT_F0 + (1.0 - COAT_F0) * (1.0 - c).powi(5);
-        // The floor keeps two cosines that underflow from giving 0 / 0.
-        let cosines = (4.0 * wi.z * wo.z).max(f32::MIN_POSITIVE);
-        let lobe = self.ggx.d(h) * self.ggx.g(wi, wo) / cosines;
+        let fresnel = COAT_F0 + (1.0 - COAT_F0) * schlick_weight(wi.dot(h));
         self.weight * fresnel * lobe
-    }
-
-    /// A direction reflected about a normal visible from `wi`; `None` when
-    /// the normal faces away.
-    pub(crate) fn sample_wo(&self, wi: Vec3, u: [f32; 2]) -> Option<Vec3> {
-        let m = self.ggx.sample_m(wi, u);
-        let im = wi.dot(m);
-        (im > 0.0).then(|| (2.0 * im * m - wi).normalize())
-    }
-
-    /// Solid-angle pdf of [`Self::sample_wo`].
-    pub(crate) fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
-        match (wi + wo).try_normalize() {
-            Some(h) if wi.dot(h) > 0.0 => self.ggx.d_visible(wi, h) / (4.0 * wi.dot(h)),
-            _ => 0.0,
-        }
     }
 
     /// The coat lobe's directional albedo, `c (f0 E1 + (1 - f0) Ew)` by the

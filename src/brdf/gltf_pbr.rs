@@ -64,7 +64,7 @@
 //! `D_wi(h) / (4 wi.h)`); otherwise a cosine-weighted direction. A reflected
 //! direction below the horizon is a failed sample (`None`).
 
-use super::ggx::Ggx;
+use super::ggx::{schlick_weight, Ggx};
 use super::ggx_energy::{average_schlick_weight, schlick_energy_weight};
 use super::gltf_coat::Coat;
 use super::phong::check_rgb01;
@@ -96,12 +96,6 @@ pub struct GltfPbr {
 struct Odds {
     coat: f32,
     specular: f32,
-}
-
-/// Schlick's weight `(1 - c)^5`.
-#[inline]
-fn schlick_weight(c: f32) -> f32 {
-    (1.0 - c.clamp(0.0, 1.0)).powi(5)
 }
 
 impl GltfPbr {
@@ -323,10 +317,10 @@ impl GltfPbr {
         let diffuse = luminance(self.albedo_of_base(cos_i));
         let coat = match self.coat.is_none() {
             true => 0.0,
-            false => super::lobe_share(
-                self.coat.reflected(cos_i),
-                self.coat.transmitted(cos_i) * (specular + diffuse),
-            ),
+            false => {
+                let (reflected, through) = self.coat.reflected_and_transmitted(cos_i);
+                super::lobe_share(reflected, through * (specular + diffuse))
+            }
         };
         Odds {
             coat,
@@ -350,12 +344,9 @@ impl GltfPbr {
     /// The specular lobe `F D G / (4 cos_i cos_o)` (both directions above
     /// the horizon).
     fn specular(&self, wi: Vec3, wo: Vec3) -> Vec3 {
-        let Some(h) = (wi + wo).try_normalize() else {
+        let Some((lobe, h)) = self.ggx.reflection(wi, wo) else {
             return Vec3::ZERO;
         };
-        // The floor keeps two cosines that underflow from giving 0 / 0.
-        let cosines = (4.0 * wi.z * wo.z).max(f32::MIN_POSITIVE);
-        let lobe = self.ggx.d(h) * self.ggx.g(wi, wo) / cosines;
         self.fresnel(wi.dot(h)) * lobe
     }
 
@@ -374,20 +365,14 @@ impl GltfPbr {
         if !self.coat.is_none() {
             match super::pick_lobe(u[0], odds.coat) {
                 (true, u0) => {
-                    return self.weighted(wi, self.coat.sample_wo(wi, [u0, u[1]])?, &odds)
+                    let wo = self.coat.ggx.sample_reflection(wi, [u0, u[1]])?;
+                    return self.weighted(wi, wo, &odds);
                 }
                 (false, u0) => u[0] = u0,
             }
         }
         let wo = match super::pick_lobe(u[0], odds.specular) {
-            (true, u0) => {
-                let m = self.ggx.sample_m(wi, [u0, u[1]]);
-                let im = wi.dot(m);
-                if im <= 0.0 {
-                    return None;
-                }
-                (2.0 * im * m - wi).normalize()
-            }
+            (true, u0) => self.ggx.sample_reflection(wi, [u0, u[1]])?,
             (false, u0) => cosine_hemisphere([u0, u[1]]),
         };
         self.weighted(wi, wo, &odds)
@@ -414,16 +399,13 @@ impl GltfPbr {
     /// the horizon).
     fn pdf_given(&self, wi: Vec3, wo: Vec3, odds: &Odds) -> f32 {
         let ps = odds.specular;
-        let spec = match (wi + wo).try_normalize() {
-            Some(h) if wi.dot(h) > 0.0 => self.ggx.d_visible(wi, h) / (4.0 * wi.dot(h)),
-            _ => 0.0,
-        };
+        let spec = self.ggx.reflection_pdf(wi, wo);
         let base = ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wo.z);
         if self.coat.is_none() {
             return base;
         }
         let pc = odds.coat;
-        pc * self.coat.pdf(wi, wo) + (1.0 - pc) * base
+        pc * self.coat.ggx.reflection_pdf(wi, wo) + (1.0 - pc) * base
     }
 
     /// Directional albedo, per channel: the base's

@@ -154,7 +154,12 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
             transmitted,
         } = convert_material(&m)?;
         let specular = material.brdf.is_specular();
-        warn_unmodelled_layers(&m, &material.brdf, transmitted.is_some(), &mut scene);
+        let coated = factors.clearcoat.is_some_and(|c| c.factor > 0.0);
+        warn_unmodelled_layers(
+            &m,
+            (&material.brdf, transmitted.is_some(), coated),
+            &mut scene,
+        );
         let id = scene.add_material(material);
         if let Some((weight, glass)) = transmitted {
             scene.set_transmission_mix(id, weight, glass)?;
@@ -466,11 +471,14 @@ fn load_mesh(
 /// Warns of the layers a material's model leaves out (`brdf/gltf_map.rs`):
 /// `KHR_materials_specular` on its glass part, which keeps its IOR's exact
 /// Fresnel term, and a clear coat on glass or on a polished metal (a
-/// mirror).
-fn warn_unmodelled_layers(m: &gltf::Material, brdf: &Brdf, partly: bool, scene: &mut Scene) {
+/// mirror). `(brdf, partly, coated)`: the material's model, whether it
+/// transmits partly, and whether its factors have a coat.
+fn warn_unmodelled_layers(
+    m: &gltf::Material,
+    (brdf, partly, coated): (&Brdf, bool, bool),
+    scene: &mut Scene,
+) {
     let label = super::gltf_textures::material_label(m);
-    let coated =
-        super::gltf_textures::clearcoat_of(m).is_ok_and(|c| c.is_some_and(|c| c.factor > 0.0));
     if coated && matches!(brdf, Brdf::Mirror(_)) {
         scene.warnings.push(format!(
             "{label}: KHR_materials_clearcoat is not modelled on a polished metal, which is \
