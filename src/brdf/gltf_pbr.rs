@@ -67,6 +67,7 @@
 use super::ggx::{schlick_weight, Ggx};
 use super::ggx_energy::{average_schlick_weight, schlick_energy_weight};
 use super::gltf_coat::Coat;
+use super::gltf_sheen::{white_albedo, Sheen};
 use super::phong::check_rgb01;
 use super::BrdfSample;
 use crate::error::{Error, Result};
@@ -84,6 +85,8 @@ pub struct GltfPbr {
     f90_d: f32,
     /// `KHR_materials_clearcoat` ([`Coat::NONE`] without it).
     coat: Coat,
+    /// `KHR_materials_sheen` ([`Sheen::NONE`] without it), under the coat.
+    sheen: Sheen,
     /// `1 / (pi (1 - E_avg))` of the strongest channel, 0 when no light
     /// enters (`E_avg = 1`) or the base has no colour (a metal): stored, as
     /// every diffuse evaluation needs it. The lobe's `f0` and `f90` and the
@@ -161,6 +164,7 @@ impl GltfPbr {
             f0_d,
             f90_d,
             coat: Coat::NONE,
+            sheen: Sheen::NONE,
             base_scale: 0.0,
         };
         b.base_scale = b.base_scale_of();
@@ -202,6 +206,42 @@ impl GltfPbr {
         (self.coat.weight, self.coat.ggx.alpha)
     }
 
+    /// The smallest sheen roughness modelled: a smaller one is read as it
+    /// (`brdf/gltf_sheen.rs`).
+    pub const MIN_SHEEN_ROUGHNESS: f32 = Sheen::MIN_ROUGHNESS;
+
+    /// The same model under a sheen of colour `color` (`sheenColorFactor`,
+    /// linear RGB) and perceptual roughness `roughness`
+    /// (`sheenRoughnessFactor`, raised to [`Self::MIN_SHEEN_ROUGHNESS`]),
+    /// `brdf/gltf_sheen.rs`; a black colour is no sheen. The sheen lies
+    /// under a clear coat, as the extensions order them.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] when a colour channel or `roughness` is
+    /// NaN or outside [0, 1].
+    pub fn with_sheen(self, color: Vec3, roughness: f32) -> Result<Self> {
+        let color = check_rgb01("gltf-pbr sheen colour", color)?;
+        if !(0.0..=1.0).contains(&roughness) {
+            return Err(Error::param(
+                "gltf-pbr sheen roughness",
+                format!("must be in [0, 1], got {roughness}"),
+            ));
+        }
+        let sheen = match color.max_element() > 0.0 {
+            false => Sheen::NONE,
+            true => Sheen {
+                color,
+                roughness: roughness.max(Sheen::MIN_ROUGHNESS),
+            },
+        };
+        Ok(GltfPbr { sheen, ..self })
+    }
+
+    /// The sheen's colour and roughness (black: none).
+    pub fn sheen(&self) -> (Vec3, f32) {
+        (self.sheen.color, self.sheen.roughness)
+    }
+
     /// [`GltfPbr::base_scale`] of the other parameters.
     fn base_scale_of(&self) -> f32 {
         if self.kd().max_element() <= 0.0 {
@@ -229,6 +269,7 @@ impl GltfPbr {
         let b = Self::derive(self.ggx, base_color, self.metallic, self.f0_d, self.f90_d);
         GltfPbr {
             coat: self.coat,
+            sheen: self.sheen,
             ..b
         }
     }
@@ -313,8 +354,15 @@ impl GltfPbr {
     /// without one: its reflection beside what it lets through times the
     /// base's lobes' weights) and then the base's specular lobe.
     fn odds(&self, cos_i: f32) -> Odds {
-        let specular = luminance(self.fresnel(cos_i));
-        let diffuse = luminance(self.albedo_of_base(cos_i));
+        let mut specular = luminance(self.fresnel(cos_i));
+        let mut diffuse = luminance(self.albedo_of_base(cos_i));
+        if !self.sheen.is_none() {
+            // The sheen is sampled by the cosine, as the diffuse base is.
+            let through = (1.0 - self.sheen.reflected(cos_i)).max(0.0);
+            let sheen = luminance(self.sheen.color) * white_albedo(cos_i, self.sheen.roughness);
+            specular *= through;
+            diffuse = diffuse * through + sheen;
+        }
         let coat = match self.coat.is_none() {
             true => 0.0,
             false => {
@@ -333,7 +381,10 @@ impl GltfPbr {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Vec3::ZERO;
         }
-        let base = self.diffuse(wi.z, wo.z) + self.specular(wi, wo);
+        let mut base = self.diffuse(wi.z, wo.z) + self.specular(wi, wo);
+        if !self.sheen.is_none() {
+            base = base * self.sheen.scaling(wi.z, wo.z) + self.sheen.eval(wi, wo);
+        }
         if self.coat.is_none() {
             return base;
         }
@@ -350,7 +401,8 @@ impl GltfPbr {
         self.fresnel(wi.dot(h)) * lobe
     }
 
-    /// Samples the specular or the diffuse lobe (see the module docs).
+    /// Samples the coat, the specular lobe, or the cosine (the diffuse
+    /// base and the sheen; see the module docs).
     pub fn sample(&self, wi: Vec3, u: [f32; 2]) -> Option<BrdfSample> {
         self.sample_with_f(wi, u).map(|(s, _)| s)
     }
@@ -417,6 +469,9 @@ impl GltfPbr {
         if wi.z.is_nan() || wi.z <= 0.0 {
             return Vec3::ZERO;
         }
+        if !self.sheen.is_none() {
+            return self.albedo_under_layers(wi);
+        }
         if self.coat.is_none() {
             return self.albedo_of_base(wi.z) + self.albedo_of_specular(wi);
         }
@@ -434,6 +489,33 @@ impl GltfPbr {
         Vec3::splat(self.coat.albedo(wi)) + self.coat.transmitted(wi.z) * (diffuse + specular)
     }
 
+    /// [`Self::albedo`] under a sheen, and under a coat if there is one:
+    /// the base's integrals weighted by what the sheen lets through
+    /// `S(cos_i, cos_o)` and the coat lets out `T(cos_o)`, the sheen's by
+    /// the latter, all under what the coat lets in, `T(cos_i)`.
+    fn albedo_under_layers(&self, wi: Vec3) -> Vec3 {
+        let coat_out = |mu: f32| match self.coat.is_none() {
+            true => 1.0,
+            false => self.coat.transmitted(mu),
+        };
+        let out = |mu: f32| coat_out(mu) * self.sheen.scaling(wi.z, mu);
+        let specular =
+            self.specular_of(self.ggx.lobe_energy_weighted(wi, |wo| f64::from(out(wo.z))));
+        let diffuse = match self.kd().max_element() > 0.0 {
+            true => {
+                let through = cosine_weighted(|mu| self.entering(mu) * out(mu));
+                self.albedo_of_base(wi.z) * through * (std::f32::consts::PI * self.base_scale)
+            }
+            false => Vec3::ZERO,
+        };
+        let sheen = self.sheen.albedo_weighted(wi, |wo| coat_out(wo.z));
+        let inner = diffuse + specular + sheen;
+        match self.coat.is_none() {
+            true => inner,
+            false => Vec3::splat(self.coat.albedo(wi)) + self.coat.transmitted(wi.z) * inner,
+        }
+    }
+
     /// The specular lobe's share of [`Self::albedo`].
     fn albedo_of_specular(&self, wi: Vec3) -> Vec3 {
         self.specular_of(self.ggx.lobe_energy(wi))
@@ -444,6 +526,18 @@ impl GltfPbr {
         let f0 = self.f0();
         f0 * e.shadowed + (Vec3::splat(self.f90()) - f0) * e.shadowed_schlick
     }
+}
+
+/// `integral e(mu) 2 mu dmu` over [0, 1] by the midpoint rule on 256 cells
+/// (the tables are piecewise linear in `mu`, so `e` is smooth within each).
+fn cosine_weighted(e: impl Fn(f32) -> f32) -> f32 {
+    const N: usize = 256;
+    let mut sum = 0.0;
+    for k in 0..N {
+        let mu = (k as f32 + 0.5) / N as f32;
+        sum += e(mu) * 2.0 * mu;
+    }
+    sum / N as f32
 }
 
 #[cfg(test)]
@@ -650,6 +744,57 @@ mod tests {
         assert_eq!(base.with_clearcoat(0.0, 0.3).unwrap(), base);
         assert!(base.with_clearcoat(1.5, 0.3).is_err());
         assert!(base.with_clearcoat(0.5, 0.0).is_err());
+    }
+
+    #[test]
+    fn the_sheen_is_its_lobe_over_the_base_scaled_by_what_it_reflects() {
+        let base = GltfPbr::new(Vec3::new(0.8, 0.2, 0.1), 0.3, 0.25, 0.04).unwrap();
+        for (color, roughness) in [(Vec3::new(0.9, 0.4, 0.6), 0.3f32), (Vec3::splat(1.0), 0.8)] {
+            let sheened = base.with_sheen(color, roughness).unwrap();
+            let layer = super::super::gltf_sheen::Sheen { color, roughness };
+            let reflected = |mu: f32| {
+                color.max_element() * super::super::gltf_sheen::white_albedo(mu, roughness)
+            };
+            for (ci, pi, co, po) in DIRS {
+                let (l, v) = (spherical_direction(ci, pi), spherical_direction(co, po));
+                let scale = (1.0 - reflected(l.z)).min(1.0 - reflected(v.z)).max(0.0);
+                let want = base.eval(l, v) * scale + layer.eval(l, v);
+                let got = sheened.eval(l, v);
+                let err = (got - want).abs().max_element();
+                assert!(err <= 1e-5 * want.max_element().max(1.0), "{got} vs {want}");
+                let (a, r) = (sheened.eval(l, v), sheened.eval(v, l));
+                assert!((a - r).abs().max_element() <= 1e-5 * a.max_element().max(1.0));
+            }
+        }
+        // A black sheen is none at all; the roughness is raised to its floor.
+        assert_eq!(base.with_sheen(Vec3::ZERO, 0.5).unwrap(), base);
+        let smooth = base.with_sheen(Vec3::ONE, 0.0).unwrap();
+        assert_eq!(smooth.sheen(), (Vec3::ONE, GltfPbr::MIN_SHEEN_ROUGHNESS));
+        assert!(base.with_sheen(Vec3::new(1.5, 0.0, 0.0), 0.3).is_err());
+        assert!(base.with_sheen(Vec3::ONE, -0.1).is_err());
+        assert!(base.with_sheen(Vec3::ONE, f32::NAN).is_err());
+    }
+
+    #[test]
+    fn a_sheen_over_a_black_base_reflects_its_lobes_albedo() {
+        // No specular (f0 = f90 = 0), no diffuse (black): the sheen alone,
+        // whose albedo is its colour times the white lobe's, under 1.
+        let black = GltfPbr::with_specular(Vec3::ZERO, 0.0, 0.25, Vec3::ZERO, 0.0).unwrap();
+        for roughness in [0.07f32, 0.3, 1.0] {
+            let b = black
+                .with_sheen(Vec3::new(1.0, 0.5, 0.25), roughness)
+                .unwrap();
+            for mu in [1.0f32, 0.5, 0.1, 0.01] {
+                let wi = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+                let a = b.albedo(wi);
+                let e = super::super::gltf_sheen::white_albedo(mu, roughness);
+                assert!(
+                    a.x <= e + 1e-4 && a.x <= 1.0 + 1e-4,
+                    "{roughness} {mu}: {a} {e}"
+                );
+                assert!((a.y - 0.5 * a.x).abs() <= 1e-6 && (a.z - 0.25 * a.x).abs() <= 1e-6);
+            }
+        }
     }
 
     #[test]

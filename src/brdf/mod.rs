@@ -23,6 +23,7 @@ mod ggx_energy;
 mod gltf_coat;
 pub mod gltf_map;
 pub mod gltf_pbr;
+mod gltf_sheen;
 pub mod lambert;
 pub mod mirror;
 pub mod phong;
@@ -96,10 +97,13 @@ pub(crate) fn lobe_share(a: f32, b: f32) -> f32 {
 }
 
 /// The words of [`Brdf::param_bits`].
-pub const PARAM_WORDS: usize = 11;
+pub const PARAM_WORDS: usize = 15;
 
 /// [`Brdf::param_bits`]'s tag of a glTF BRDF under a clear coat.
 const COATED_GLTF_TAG: u8 = 9;
+/// [`Brdf::param_bits`]'s tag of a glTF BRDF under a sheen (and a coat,
+/// if it has one).
+const SHEEN_GLTF_TAG: u8 = 10;
 
 /// The reflection models a scene may use.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -303,48 +307,15 @@ impl Brdf {
     /// into 0.0): equal models, and only they, have equal values. The
     /// analysis cache is keyed by it.
     pub fn param_bits(&self) -> (u8, [u32; PARAM_WORDS]) {
-        let (tag, params): (u8, [f32; PARAM_WORDS]) = match self {
-            Brdf::Lambert(b) => {
-                let a = b.albedo;
-                (1, [a.x, a.y, a.z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
-            }
+        let (tag, params): (u8, Vec<f32>) = match self {
+            Brdf::Lambert(b) => (1, b.albedo.to_array().to_vec()),
             Brdf::Phong(b) => {
                 let (d, s) = (b.kd(), b.ks());
-                (
-                    2,
-                    [
-                        d.x,
-                        d.y,
-                        d.z,
-                        s.x,
-                        s.y,
-                        s.z,
-                        b.exponent(),
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                )
+                (2, vec![d.x, d.y, d.z, s.x, s.y, s.z, b.exponent()])
             }
             Brdf::CookTorrance(b) => {
                 let (d, f) = (b.kd(), b.f0());
-                (
-                    3,
-                    [
-                        d.x,
-                        d.y,
-                        d.z,
-                        f.x,
-                        f.y,
-                        f.z,
-                        b.roughness(),
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                )
+                (3, vec![d.x, d.y, d.z, f.x, f.y, f.z, b.roughness()])
             }
             Brdf::GltfPbr(b) => {
                 let c = b.base_color();
@@ -357,54 +328,43 @@ impl Brdf {
                 // A grey f0 and f90 = 1 (no KHR_materials_specular) keep the
                 // tag and layout of before it, so the analysis draws the
                 // numbers it drew (it is seeded by `key`).
-                // A clear coat takes a tag and the two last words of its own.
+                // A clear coat takes a tag and the two words after them of
+                // its own; a sheen a tag and four words more.
                 let (cw, ca) = b.clearcoat();
-                if cw > 0.0 {
+                let (sc, sr) = b.sheen();
+                if sc.max_element() > 0.0 {
+                    let w = [c.x, c.y, c.z, m, a, f.x, f.y, f.z, f90, cw, ca];
+                    (SHEEN_GLTF_TAG, [&w[..], &[sc.x, sc.y, sc.z, sr]].concat())
+                } else if cw > 0.0 {
                     (
                         COATED_GLTF_TAG,
-                        [c.x, c.y, c.z, m, a, f.x, f.y, f.z, f90, cw, ca],
+                        vec![c.x, c.y, c.z, m, a, f.x, f.y, f.z, f90, cw, ca],
                     )
                 } else if f == Vec3::splat(f.x) && f90 == 1.0 {
-                    (7, [c.x, c.y, c.z, m, a, f.x, 0.0, 0.0, 0.0, 0.0, 0.0])
+                    (7, vec![c.x, c.y, c.z, m, a, f.x])
                 } else {
-                    (8, [c.x, c.y, c.z, m, a, f.x, f.y, f.z, f90, 0.0, 0.0])
+                    (8, vec![c.x, c.y, c.z, m, a, f.x, f.y, f.z, f90])
                 }
             }
-            Brdf::Mirror(b) => {
-                let r = b.reflectance();
-                (4, [r.x, r.y, r.z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
-            }
+            Brdf::Mirror(b) => (4, b.reflectance().to_array().to_vec()),
             Brdf::Dielectric(b) => {
                 let (t, a) = (b.tint(), b.attenuation());
                 let thin = f32::from(u8::from(b.thin()));
-                (
-                    5,
-                    [t.x, t.y, t.z, a.x, a.y, a.z, b.ior(), thin, 0.0, 0.0, 0.0],
-                )
+                (5, vec![t.x, t.y, t.z, a.x, a.y, a.z, b.ior(), thin])
             }
             Brdf::RoughDielectric(b) => {
                 let (t, a) = (b.tint(), b.attenuation());
                 let thin = f32::from(u8::from(b.thin()));
                 (
                     6,
-                    [
-                        t.x,
-                        t.y,
-                        t.z,
-                        a.x,
-                        a.y,
-                        a.z,
-                        b.ior(),
-                        thin,
-                        b.alpha(),
-                        0.0,
-                        0.0,
-                    ],
+                    vec![t.x, t.y, t.z, a.x, a.y, a.z, b.ior(), thin, b.alpha()],
                 )
             }
         };
-        // +0.0 folds -0.0 into 0.0 so equal values give equal bits.
-        (tag, params.map(|v| (v + 0.0).to_bits()))
+        // The unused words are 0; +0.0 folds -0.0 into 0.0 so equal values
+        // give equal bits.
+        let bits = std::array::from_fn(|k| (params.get(k).copied().unwrap_or(0.0) + 0.0).to_bits());
+        (tag, bits)
     }
 
     /// A 64-bit hash of [`Brdf::param_bits`] (seeds, quick keys): distinct
@@ -415,6 +375,8 @@ impl Brdf {
         // The nine words the models had before the clear coat are hashed
         // alone, so their keys (the analysis's seeds) stay what they were.
         let words = if tag == COATED_GLTF_TAG {
+            &bits[..11]
+        } else if tag == SHEEN_GLTF_TAG {
             &bits[..]
         } else {
             &bits[..9]
