@@ -1,7 +1,7 @@
 //! From glTF 2.0 materials to this crate's models: the core
 //! metallic-roughness factors and the extensions `KHR_materials_clearcoat`,
-//! `KHR_materials_ior`, `KHR_materials_specular`, `KHR_materials_transmission`
-//! and `KHR_materials_volume`.
+//! `KHR_materials_ior`, `KHR_materials_sheen`, `KHR_materials_specular`,
+//! `KHR_materials_transmission` and `KHR_materials_volume`.
 //!
 //! Inputs ([`GltfMaterial`]): `base_color` (linear RGB in [0, 1]), `metallic`
 //! in [0, 1], `roughness` (glTF's perceptual roughness) in [0, 1]; the
@@ -36,20 +36,33 @@
 //! a [`Mirror`], its coat dropped (the scene loader warns): a glossy lobe of
 //! alpha 1e-3 in its place would store photons on a mirror and weight them
 //! by its sharp peak.
+//!
+//! `KHR_materials_sheen` puts a sheen of colour `sheenColorFactor` (linear
+//! RGB) and roughness `sheenRoughnessFactor` (raised to
+//! [`GltfPbr::MIN_SHEEN_ROUGHNESS`]) over the base, under the coat
+//! ([`GltfPbr::with_sheen`]): `brdf/gltf_sheen.rs`'s Charlie lobe, the
+//! base scaled by what the sheen lets through as the extension's albedo
+//! scaling says. A black colour (the default) is no sheen. As with the
+//! coat, a sheened matte dielectric is [`GltfPbr`], not [`Lambert`] (the
+//! sheen is what shows at grazing angles), and a sheened polished metal
+//! stays a [`Mirror`], its sheen dropped (the scene loader warns).
+//!
 //! Beckmann [`super::CookTorrance`] is not used for glTF materials (it stays
 //! available to code and to `adaptive-pm analyze`).
 //!
 //! Special cases, checked in this order:
 //! 1. `metallic = 1` and `alpha < MIN_ALPHA` (roughness below 0.032) →
 //!    [`Mirror`] of reflectance `base_color` (a polished metal; Schlick's
-//!    rise towards white at grazing angles is dropped);
-//! 2. `metallic = 0`, `roughness = 1` and every channel of `f0_d` at most
-//!    0.04 (IOR at most 1.5, no stronger specular colour) →
+//!    rise towards white at grazing angles is dropped; a coat or a sheen
+//!    is dropped too);
+//! 2. `metallic = 0`, `roughness = 1`, every channel of `f0_d` at most
+//!    0.04 (IOR at most 1.5, no stronger specular colour), and neither a
+//!    coat nor a sheen →
 //!    [`Lambert`] of albedo `base_color`: a matte dielectric, whose 4 %
-//!    specular sheen the photon counts cannot tell from diffuse. This is an
-//!    approximation of the specification's BRDF (whose diffuse base is
-//!    weighted by `1 - F_d` and whose sheen adds a little at grazing
-//!    angles), kept because the paper's scenes are Lambertian and the
+//!    specular reflection the photon counts cannot tell from diffuse. This
+//!    is an approximation of the specification's BRDF (whose diffuse base
+//!    is weighted by `1 - F_d` and whose specular lobe adds a little at
+//!    grazing angles), kept because the paper's scenes are Lambertian and the
 //!    diffuse walls of the built-in boxes are glTF materials of this kind;
 //! 3. otherwise → [`GltfPbr`].
 //!
@@ -89,16 +102,17 @@
 //! whatever part scatters at its boundary.
 //! [`from_gltf_material`], which returns one BRDF, refuses a mix.
 //!
-//! `KHR_materials_specular` and `KHR_materials_clearcoat` shape the opaque
-//! part only: the glass part
-//! keeps the exact Fresnel term of its IOR (the scene loader warns when the
-//! extension would change it).
+//! `KHR_materials_specular`, `KHR_materials_clearcoat` and
+//! `KHR_materials_sheen` shape the opaque part only: the glass part
+//! keeps the exact Fresnel term of its IOR and has neither coat nor sheen
+//! (the scene loader warns when an extension would change it).
 //!
-//! The extensions' textures, but `KHR_materials_specular`'s and
-//! `KHR_materials_clearcoat`'s weight and roughness textures, are ignored
-//! (the opaque materials' base colour, metallic-roughness, specular and
-//! clear coat textures are read by the scene loader, which maps each
-//! point's factors here).
+//! The extensions' textures, but `KHR_materials_specular`'s,
+//! `KHR_materials_clearcoat`'s weight and roughness textures and
+//! `KHR_materials_sheen`'s colour and roughness textures, are ignored
+//! (the opaque materials' base colour, metallic-roughness, specular,
+//! clear coat and sheen textures are read by the scene loader, which maps
+//! each point's factors here).
 //!
 //! # The IOR
 //! Default 1.5. It must be in [1, 4] (the specification allows any value
@@ -133,6 +147,8 @@ pub struct GltfMaterial {
     pub specular: Option<GltfSpecular>,
     /// `KHR_materials_clearcoat`; `None` without the extension (no coat).
     pub clearcoat: Option<GltfClearcoat>,
+    /// `KHR_materials_sheen`; `None` without the extension (no sheen).
+    pub sheen: Option<GltfSheen>,
 }
 
 /// The factors of `KHR_materials_clearcoat` (module docs).
@@ -159,6 +175,31 @@ impl GltfClearcoat {
     }
 }
 
+/// The factors of `KHR_materials_sheen` (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GltfSheen {
+    /// `sheenColorFactor`: linear RGB, each channel in [0, 1] (black: no
+    /// sheen).
+    pub color: Vec3,
+    /// `sheenRoughnessFactor` in [0, 1] (perceptual roughness).
+    pub roughness: f32,
+}
+
+impl GltfSheen {
+    /// Checks the factors against the extension's ranges.
+    fn check(self) -> Result<Self> {
+        super::phong::check_rgb01("gltf sheenColorFactor", self.color)?;
+        let r = self.roughness;
+        if !(0.0..=1.0).contains(&r) {
+            return Err(Error::param(
+                "gltf sheenRoughnessFactor",
+                format!("must be in [0, 1], got {r}"),
+            ));
+        }
+        Ok(self)
+    }
+}
+
 impl GltfMaterial {
     /// The core factors alone, no extension.
     pub fn new(base_color: Vec3, metallic: f32, roughness: f32) -> Self {
@@ -171,6 +212,7 @@ impl GltfMaterial {
             volume: None,
             specular: None,
             clearcoat: None,
+            sheen: None,
         }
     }
 }
@@ -334,6 +376,8 @@ pub struct GltfLobes {
 ///   channel is negative or not finite;
 /// - `clearcoatFactor` or `clearcoatRoughnessFactor` is NaN or outside
 ///   [0, 1];
+/// - a `sheenColorFactor` channel or `sheenRoughnessFactor` is NaN or
+///   outside [0, 1];
 /// - the material transmits partly (`0 < transmissionFactor < 1`, or
 ///   transmission on a partial metal, `0 < metallic < 1`), which one BRDF
 ///   cannot hold ([`gltf_lobes`] maps it; a full metal transmits nothing:
@@ -392,6 +436,7 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
         .check()?
         .fresnel(dielectric_f0(ior));
     let coat = m.clearcoat.unwrap_or_default().check()?;
+    let sheen = m.sheen.unwrap_or_default().check()?;
     let (metallic, roughness) = (m.metallic, m.roughness);
     let alone = |surface| {
         Ok(GltfLobes {
@@ -408,7 +453,7 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
             metallic,
             roughness,
             (f0_d, f90_d),
-            coat,
+            (coat, sheen),
         )?);
     }
     // The glass part's share, and the rest: the metal and the opaque
@@ -429,7 +474,7 @@ pub fn gltf_lobes(m: &GltfMaterial) -> Result<GltfLobes> {
     // `rest` is `metallic` exactly at transmissionFactor 1: a full metal.
     let metal = (metallic / rest).min(1.0);
     Ok(GltfLobes {
-        surface: opaque(base_color, metal, roughness, (f0_d, f90_d), coat)?,
+        surface: opaque(base_color, metal, roughness, (f0_d, f90_d), (coat, sheen))?,
         transmitted: Some((share, glass)),
         surface_factors: GltfMaterial {
             metallic: metal,
@@ -452,26 +497,29 @@ fn dielectric_f0(ior: f32) -> f32 {
 
 /// The opaque mapping of checked factors (module docs), with dielectric
 /// Fresnel reflectance `(f0_d, f90_d)` at normal and grazing incidence,
-/// under clear coat `coat`.
+/// under clear coat `coat` and sheen `sheen` (checked factors).
 fn opaque(
     base_color: Vec3,
     metallic: f32,
     roughness: f32,
     (f0_d, f90_d): (Vec3, f32),
-    coat: GltfClearcoat,
+    (coat, sheen): (GltfClearcoat, GltfSheen),
 ) -> Result<Brdf> {
     let alpha = roughness * roughness;
-    let coated = coat.factor > 0.0;
+    // A layer over a matte base shows at grazing angles, where Lambert
+    // would not.
+    let layered = coat.factor > 0.0 || sheen.color.max_element() > 0.0;
     if metallic == 1.0 && alpha < GltfPbr::MIN_ALPHA {
         return Ok(Mirror::new(base_color)?.into());
     }
-    if metallic == 0.0 && roughness == 1.0 && f0_d.max_element() <= 0.04 && !coated {
+    if metallic == 0.0 && roughness == 1.0 && f0_d.max_element() <= 0.04 && !layered {
         return Ok(Lambert::new(base_color)?.into());
     }
     let alpha = alpha.max(GltfPbr::MIN_ALPHA);
     let b = GltfPbr::with_specular(base_color, metallic, alpha, f0_d, f90_d)?;
     let coat_alpha = (coat.roughness * coat.roughness).max(GltfPbr::MIN_ALPHA);
-    Ok(b.with_clearcoat(coat.factor, coat_alpha)?.into())
+    let b = b.with_clearcoat(coat.factor, coat_alpha)?;
+    Ok(b.with_sheen(sheen.color, sheen.roughness)?.into())
 }
 
 #[cfg(test)]
@@ -582,6 +630,49 @@ mod tests {
         ] {
             let e = message(&m(0.0, 0.5, bad, None));
             assert!(e.contains("specular"), "{bad:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_sheen_layers_the_opaque_part_and_spares_the_mirror_and_the_glass() {
+        let sheen = |color, roughness| GltfSheen { color, roughness };
+        let m = |metallic, roughness, s, transmission| GltfMaterial {
+            sheen: Some(s),
+            transmission,
+            ..GltfMaterial::new(Vec3::splat(0.5), metallic, roughness)
+        };
+        let velvet = sheen(Vec3::new(0.9, 0.5, 0.1), 0.5);
+        // A matte dielectric under a sheen is the glTF BRDF, not Lambert.
+        let Ok(Brdf::GltfPbr(b)) = from_gltf_material(&m(0.0, 1.0, velvet, None)) else {
+            panic!("a sheened matte dielectric")
+        };
+        assert_eq!(b.sheen(), (velvet.color, 0.5));
+        // A black sheen is none: the shortcut again, bit for bit.
+        let black = m(0.0, 1.0, sheen(Vec3::ZERO, 0.5), None);
+        assert!(matches!(from_gltf_material(&black), Ok(Brdf::Lambert(_))));
+        // A polished metal stays a mirror; glass takes no sheen, the
+        // opaque part of a mix does.
+        assert!(matches!(
+            from_gltf_material(&m(1.0, 0.0, velvet, None)),
+            Ok(Brdf::Mirror(_))
+        ));
+        let glass = from_gltf_material(&m(0.0, 0.5, velvet, Some(1.0))).unwrap();
+        assert!(matches!(glass, Brdf::RoughDielectric(_)));
+        let mix = gltf_lobes(&m(0.0, 0.5, velvet, Some(0.5))).unwrap();
+        let Brdf::GltfPbr(opaque) = mix.surface else {
+            panic!("the opaque part")
+        };
+        assert_eq!(opaque.sheen(), (velvet.color, 0.5));
+        // Out of range: named.
+        for (bad, name) in [
+            (sheen(Vec3::new(1.0, 1.5, 1.0), 0.5), "sheenColorFactor"),
+            (sheen(Vec3::new(-0.1, 1.0, 1.0), 0.5), "sheenColorFactor"),
+            (sheen(Vec3::splat(f32::NAN), 0.5), "sheenColorFactor"),
+            (sheen(Vec3::ONE, 1.5), "sheenRoughnessFactor"),
+            (sheen(Vec3::ONE, f32::NAN), "sheenRoughnessFactor"),
+        ] {
+            let e = message(&m(0.0, 0.5, bad, None));
+            assert!(e.contains(name), "{bad:?}: {e}");
         }
     }
 

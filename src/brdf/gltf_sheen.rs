@@ -453,9 +453,10 @@ mod tests {
             let mut last = 0.0;
             for j in 0..ROUGH_NODES {
                 let e = white_albedo(mu, rough_at(j));
-                // Read high by at most the margin and a shortfall: S
-                // clamps at 0 where it passes 1.
-                assert!((0.0..=1.01).contains(&e), "{mu} {j}: {e}");
+                // Read high by the margin and the cells' shortfall (up to
+                // 0.05 in the first cells above grazing, where the albedo
+                // turns fastest): S clamps at 0 where it passes 1.
+                assert!((0.0..=1.05).contains(&e), "{mu} {j}: {e}");
                 last = e.max(last);
             }
             assert!(last > 0.0);

@@ -50,7 +50,7 @@ fn brdf_name(b: &Brdf) -> String {
             )
         }
         Brdf::GltfPbr(g) => format!(
-            "gltf-pbr base {} metallic {} alpha {} f0 {}{}{}",
+            "gltf-pbr base {} metallic {} alpha {} f0 {}{}{}{}",
             rgb(g.base_color()),
             g.metallic(),
             g.alpha(),
@@ -62,6 +62,10 @@ fn brdf_name(b: &Brdf) -> String {
             match g.clearcoat() {
                 (0.0, _) => String::new(),
                 (w, a) => format!(" clearcoat {w} alpha {a}"),
+            },
+            match g.sheen() {
+                (c, _) if c.max_element() <= 0.0 => String::new(),
+                (c, r) => format!(" sheen {} roughness {r}", rgb(c)),
             }
         ),
         Brdf::Mirror(m) => format!("mirror {}", rgb(m.reflectance())),

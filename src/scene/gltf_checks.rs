@@ -71,7 +71,7 @@ pub(super) fn multiplicity(t: Type) -> u64 {
 /// The extensions a file may require: those the loader reads, and
 /// `KHR_texture_basisu`, whose textures (with no PNG, JPEG or WebP image)
 /// load with their factors alone and a warning.
-const SUPPORTED_REQUIRED: [&str; 14] = [
+const SUPPORTED_REQUIRED: [&str; 15] = [
     "KHR_lights_punctual",
     super::gltf_meshopt::EXT_MESHOPT_COMPRESSION,
     super::gltf_meshopt::KHR_MESHOPT_COMPRESSION,
@@ -80,6 +80,7 @@ const SUPPORTED_REQUIRED: [&str; 14] = [
     "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_sheen",
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_volume",

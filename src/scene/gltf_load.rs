@@ -23,7 +23,8 @@
 //!   metallic-roughness, with `KHR_materials_ior`, `KHR_materials_specular`
 //!   (the dielectric's Fresnel colour and strength, with its textures),
 //!   `KHR_materials_clearcoat` (a clear coat, with its weight and roughness
-//!   textures),
+//!   textures), `KHR_materials_sheen` (a sheen under the coat, with its
+//!   colour and roughness textures),
 //!   `KHR_materials_transmission` (glass) and `KHR_materials_volume` (thin
 //!   wall or refracting volume, absorption); partial transmission (or transmission on a partial
 //!   metal) is its opaque part and a glass part
@@ -154,10 +155,9 @@ pub(super) fn load_slice(bytes: &[u8], assets: Option<&AssetRoot>) -> Result<Sce
             transmitted,
         } = convert_material(&m)?;
         let specular = material.brdf.is_specular();
-        let coated = factors.clearcoat.is_some_and(|c| c.factor > 0.0);
         warn_unmodelled_layers(
             &m,
-            (&material.brdf, transmitted.is_some(), coated),
+            (&material.brdf, transmitted.is_some(), &factors),
             &mut scene,
         );
         let id = scene.add_material(material);
@@ -470,20 +470,29 @@ fn load_mesh(
 
 /// Warns of the layers a material's model leaves out (`brdf/gltf_map.rs`):
 /// `KHR_materials_specular` on its glass part, which keeps its IOR's exact
-/// Fresnel term, and a clear coat on glass or on a polished metal (a
-/// mirror). `(brdf, partly, coated)`: the material's model, whether it
-/// transmits partly, and whether its factors have a coat.
+/// Fresnel term, and a clear coat or a sheen on glass or on a polished
+/// metal (a mirror). `(brdf, partly, factors)`: the material's model,
+/// whether it transmits partly, and the factors it was mapped from.
 fn warn_unmodelled_layers(
     m: &gltf::Material,
-    (brdf, partly, coated): (&Brdf, bool, bool),
+    (brdf, partly, factors): (&Brdf, bool, &GltfMaterial),
     scene: &mut Scene,
 ) {
     let label = super::gltf_textures::material_label(m);
-    if coated && matches!(brdf, Brdf::Mirror(_)) {
-        scene.warnings.push(format!(
-            "{label}: KHR_materials_clearcoat is not modelled on a polished metal, which is \
-             traced as a mirror"
-        ));
+    let coated = factors.clearcoat.is_some_and(|c| c.factor > 0.0);
+    let sheened = factors.sheen.is_some_and(|s| s.color.max_element() > 0.0);
+    let layers = [
+        (coated, "KHR_materials_clearcoat"),
+        (sheened, "KHR_materials_sheen"),
+    ];
+    let present = layers.into_iter().filter(|&(on, _)| on).map(|(_, ext)| ext);
+    if matches!(brdf, Brdf::Mirror(_)) {
+        for ext in present.clone() {
+            scene.warnings.push(format!(
+                "{label}: {ext} is not modelled on a polished metal, which is traced as a \
+                 mirror"
+            ));
+        }
     }
     let glass = partly || matches!(brdf, Brdf::Dielectric(_) | Brdf::RoughDielectric(_));
     if !glass {
@@ -501,9 +510,9 @@ fn warn_unmodelled_layers(
              which reflects by its IOR's Fresnel term"
         ));
     }
-    if coated {
+    for ext in present {
         scene.warnings.push(format!(
-            "{label}: KHR_materials_clearcoat is not modelled on its transmitting (glass) part"
+            "{label}: {ext} is not modelled on its transmitting (glass) part"
         ));
     }
 }
@@ -600,6 +609,8 @@ fn convert_material(m: &gltf::Material) -> Result<Converted> {
             color: Vec3::from(s.specular_color_factor()),
         }),
         clearcoat: super::gltf_textures::clearcoat_of(m)
+            .map_err(|e| Error::InvalidScene(format!("{label}: {e}")))?,
+        sheen: super::gltf_textures::sheen_of(m)
             .map_err(|e| Error::InvalidScene(format!("{label}: {e}")))?,
     };
     let lobes = gltf_lobes(&input).map_err(|e| Error::InvalidScene(format!("{label}: {e}")))?;

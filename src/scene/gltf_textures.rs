@@ -20,9 +20,9 @@ use super::normal_map::NormalMap;
 use super::texture::{Filter, Sampler, TexTransform, Texture, TextureRef, Wrap};
 use super::textured::MaterialMaps;
 use super::Scene;
-use crate::brdf::{GltfClearcoat, GltfMaterial};
+use crate::brdf::{GltfClearcoat, GltfMaterial, GltfSheen};
 use crate::error::{Error, Result};
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 
 /// Loads each texture once, the first time a material reads it.
@@ -91,32 +91,32 @@ impl<'a> TextureLoader<'a> {
         let pbr = m.pbr_metallic_roughness();
         let ext = m.specular();
         // The textures that shape the BRDF: base colour, metallic-roughness,
-        // specular strength, specular colour; and the clear coat's, which
-        // the gltf crate does not parse (checked by `check_json`).
+        // specular strength, specular colour; and the clear coat's and the
+        // sheen's, which the gltf crate does not parse (checked by
+        // `check_json`).
         let mut shaping = [
             pbr.base_color_texture(),
             pbr.metallic_roughness_texture(),
             ext.as_ref().and_then(|s| s.specular_texture()),
             ext.as_ref().and_then(|s| s.specular_color_texture()),
         ];
-        let coat = m.extension_value(CLEARCOAT);
-        let mut coat_shaping = ["clearcoatTexture", "clearcoatRoughnessTexture"]
-            .map(|key| coat.and_then(|c| c.get(key)));
+        let mut layer_shaping =
+            JSON_TEXTURES.map(|(ext, key)| m.extension_value(ext).and_then(|e| e.get(key)));
         let normal = m.normal_texture();
         let shapes = |a: &[Option<gltf::texture::Info>], b: &[Option<&serde_json::Value>]| {
             a.iter().any(Option::is_some) || b.iter().any(Option::is_some)
         };
         // A mirror or glass bends its normals, but scatters by its factors.
-        if specular && shapes(&shaping, &coat_shaping) {
+        if specular && shapes(&shaping, &layer_shaping) {
             scene.warnings.push(format!(
-                "{label}: its base colour, metallic-roughness, specular and clear coat \
-                 textures are not read (a mirror or glass scatters by its factors; \
+                "{label}: its base colour, metallic-roughness, specular, clear coat and \
+                 sheen textures are not read (a mirror or glass scatters by its factors; \
                  only an alphaMode MASK reads the base colour texture's alpha)"
             ));
             shaping = [None, None, None, None];
-            coat_shaping = [None, None];
+            layer_shaping = [None; JSON_TEXTURES.len()];
         }
-        if !shapes(&shaping, &coat_shaping) && normal.is_none() {
+        if !shapes(&shaping, &layer_shaping) && normal.is_none() {
             return Ok(None);
         }
         let mut maps = MaterialMaps::new(factors);
@@ -131,10 +131,12 @@ impl<'a> TextureLoader<'a> {
                 *slot = self.texture_ref(&info, scene)?;
             }
         }
-        let [coat_weight, coat_roughness] = coat_shaping;
+        let [coat_weight, coat_roughness, sheen_color, sheen_roughness] = layer_shaping;
         for (info, slot) in [
             (coat_weight, &mut maps.clearcoat),
             (coat_roughness, &mut maps.clearcoat_roughness),
+            (sheen_color, &mut maps.sheen_color),
+            (sheen_roughness, &mut maps.sheen_roughness),
         ] {
             if let Some(info) = info {
                 *slot = self.json_texture_ref(info, scene)?;
@@ -256,7 +258,8 @@ impl<'a> TextureLoader<'a> {
         info: &serde_json::Value,
         scene: &mut Scene,
     ) -> Result<Option<TextureRef>> {
-        let info = json_info(info).map_err(Error::InvalidScene)?;
+        let info = json_info(info)
+            .map_err(|e| Error::InvalidScene(format!("a layer's texture is {e}")))?;
         let Some(t) = self.doc.textures().nth(info.index.value()) else {
             return Err(Error::InvalidScene(format!(
                 "a texture info names texture {}, which does not exist",
@@ -365,16 +368,16 @@ fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
             .push(format!("{label}: {what} is not modelled"));
     }
     // The extensions the loader reads are parsed by the gltf crate, but the
-    // clear coat, read from its JSON; any other (sheen, unlit, ...) is
-    // ignored, and said so.
+    // clear coat and the sheen, read from their JSON; any other (unlit,
+    // iridescence, ...) is ignored, and said so.
     for (name, value) in m.extensions().into_iter().flatten() {
-        if name != CLEARCOAT {
+        if name != CLEARCOAT && name != SHEEN {
             scene.warnings.push(format!(
                 "{label}: its extension {name} is not modelled (ignored)"
             ));
             continue;
         }
-        if value.get("clearcoatNormalTexture").is_some() {
+        if name == CLEARCOAT && value.get("clearcoatNormalTexture").is_some() {
             scene.warnings.push(format!(
                 "{label}: its {CLEARCOAT} clearcoatNormalTexture is not read (the coat \
                  takes the surface's shading normal)"
@@ -386,9 +389,23 @@ fn warn_unmodelled(m: &gltf::Material, label: &str, scene: &mut Scene) {
 /// The clear coat extension, which the gltf crate does not parse.
 const CLEARCOAT: &str = "KHR_materials_clearcoat";
 
-/// A `textureInfo` of an extension the gltf crate does not parse.
+/// The sheen extension, which the gltf crate does not parse.
+const SHEEN: &str = "KHR_materials_sheen";
+
+/// The textures read from the JSON of extensions the gltf crate does not
+/// parse, as (extension, key): the clear coat's weight and roughness, the
+/// sheen's colour and roughness.
+const JSON_TEXTURES: [(&str, &str); 4] = [
+    (CLEARCOAT, "clearcoatTexture"),
+    (CLEARCOAT, "clearcoatRoughnessTexture"),
+    (SHEEN, "sheenColorTexture"),
+    (SHEEN, "sheenRoughnessTexture"),
+];
+
+/// A `textureInfo` of an extension the gltf crate does not parse; the
+/// error says why not, for its caller to name what it read.
 fn json_info(v: &serde_json::Value) -> std::result::Result<gltf::json::texture::Info, String> {
-    serde_json::from_value(v.clone()).map_err(|e| format!("a {CLEARCOAT} texture info: {e}"))
+    serde_json::from_value(v.clone()).map_err(|e| format!("not a texture info ({e})"))
 }
 
 /// The factors of material `m`'s `KHR_materials_clearcoat` (read from its
@@ -417,6 +434,48 @@ pub(super) fn clearcoat_of(
         factor: number("clearcoatFactor")?,
         roughness: number("clearcoatRoughnessFactor")?,
     }))
+}
+
+/// The factors of material `m`'s `KHR_materials_sheen` (read from its
+/// JSON; ranges are checked by the mapping); `None` without it.
+///
+/// # Errors
+/// A message naming the property when the extension is not an object,
+/// `sheenColorFactor` is not three numbers or `sheenRoughnessFactor` is not
+/// a number.
+pub(super) fn sheen_of(m: &gltf::Material) -> std::result::Result<Option<GltfSheen>, String> {
+    let Some(v) = m.extension_value(SHEEN) else {
+        return Ok(None);
+    };
+    if !v.is_object() {
+        return Err(format!("{SHEEN} is not a JSON object"));
+    }
+    let color = match v.get("sheenColorFactor") {
+        None => Vec3::ZERO,
+        Some(x) => {
+            rgb_of(x).ok_or_else(|| format!("{SHEEN} sheenColorFactor is not three numbers"))?
+        }
+    };
+    let roughness = match v.get("sheenRoughnessFactor") {
+        None => 0.0,
+        Some(x) => x
+            .as_f64()
+            .map(|x| x as f32)
+            .ok_or_else(|| format!("{SHEEN} sheenRoughnessFactor is not a number"))?,
+    };
+    Ok(Some(GltfSheen { color, roughness }))
+}
+
+/// A JSON array of three numbers as RGB.
+fn rgb_of(v: &serde_json::Value) -> Option<Vec3> {
+    match v.as_array()?.as_slice() {
+        [r, g, b] => Some(Vec3::new(
+            r.as_f64()? as f32,
+            g.as_f64()? as f32,
+            b.as_f64()? as f32,
+        )),
+        _ => None,
+    }
 }
 
 /// Reads the texture coordinates the mesh's material needs, from primitive
@@ -520,10 +579,11 @@ pub(super) fn check_json(root: &gltf::json::Root) -> Result<()> {
         }
         let pbr = &m.pbr_metallic_roughness;
         let specular = m.extensions.as_ref().and_then(|e| e.specular.as_ref());
-        let coat = m.extensions.as_ref().and_then(|e| e.others.get(CLEARCOAT));
-        for key in ["clearcoatTexture", "clearcoatRoughnessTexture"] {
-            if let Some(v) = coat.and_then(|c| c.get(key)) {
-                let info = json_info(v).map_err(|e| Error::InvalidScene(format!("{name}: {e}")))?;
+        let others = m.extensions.as_ref().map(|e| &e.others);
+        for (ext, key) in JSON_TEXTURES {
+            if let Some(v) = others.and_then(|o| o.get(ext)).and_then(|e| e.get(key)) {
+                let info = json_info(v)
+                    .map_err(|e| Error::InvalidScene(format!("{name}: its {ext} {key} is {e}")))?;
                 check_info(root, &name, &info)?;
             }
         }

@@ -16,7 +16,9 @@
 //! `roughnessFactor * texel.g` (linear); with `KHR_materials_specular`,
 //! `specularFactor * texel.a` (linear) and `specularColorFactor * texel`
 //! (sRGB-decoded); with `KHR_materials_clearcoat`, `clearcoatFactor *
-//! texel.r` and `clearcoatRoughnessFactor * texel.g` (linear). The base
+//! texel.r` and `clearcoatRoughnessFactor * texel.g` (linear); with
+//! `KHR_materials_sheen`, `sheenColorFactor * texel.rgb` (sRGB-decoded) and
+//! `sheenRoughnessFactor * texel.a` (linear). The base
 //! colour texture's alpha does not shade: with
 //! `alphaMode: MASK` it cuts holes ([`super::alpha`]), where no ray stops.
 //!
@@ -28,7 +30,9 @@
 use super::normal_map::NormalMap;
 use super::texture::{Encoding, Texture, TextureRef};
 use super::Scene;
-use crate::brdf::{from_gltf_material, Brdf, GltfClearcoat, GltfMaterial, GltfSpecular, Lambert};
+use crate::brdf::{
+    from_gltf_material, Brdf, GltfClearcoat, GltfMaterial, GltfSheen, GltfSpecular, Lambert,
+};
 use crate::error::{Error, Result};
 use crate::raycast::Hit;
 use glam::{Vec2, Vec3, Vec4};
@@ -61,6 +65,11 @@ pub struct MaterialMaps {
     /// `KHR_materials_clearcoat.clearcoatRoughnessTexture` (linear; the
     /// roughness in green).
     pub clearcoat_roughness: Option<TextureRef>,
+    /// `KHR_materials_sheen.sheenColorTexture` (sRGB).
+    pub sheen_color: Option<TextureRef>,
+    /// `KHR_materials_sheen.sheenRoughnessTexture` (linear; the roughness
+    /// in alpha).
+    pub sheen_roughness: Option<TextureRef>,
 }
 
 /// The decoded texels a point reads, `ONE` for a texture the material lacks.
@@ -71,6 +80,8 @@ struct Texels {
     specular_color: Vec4,
     clearcoat: Vec4,
     clearcoat_roughness: Vec4,
+    sheen_color: Vec4,
+    sheen_roughness: Vec4,
 }
 
 impl MaterialMaps {
@@ -85,6 +96,8 @@ impl MaterialMaps {
             specular_color: None,
             clearcoat: None,
             clearcoat_roughness: None,
+            sheen_color: None,
+            sheen_roughness: None,
         }
     }
 
@@ -103,6 +116,8 @@ impl MaterialMaps {
             self.specular_color.as_ref(),
             self.clearcoat.as_ref(),
             self.clearcoat_roughness.as_ref(),
+            self.sheen_color.as_ref(),
+            self.sheen_roughness.as_ref(),
         ]
         .into_iter()
     }
@@ -122,6 +137,8 @@ impl MaterialMaps {
             specular_color: at(&self.specular_color, Encoding::Srgb),
             clearcoat: at(&self.clearcoat, Encoding::Linear),
             clearcoat_roughness: at(&self.clearcoat_roughness, Encoding::Linear),
+            sheen_color: at(&self.sheen_color, Encoding::Srgb),
+            sheen_roughness: at(&self.sheen_roughness, Encoding::Linear),
         }
     }
 
@@ -139,6 +156,10 @@ impl MaterialMaps {
             clearcoat: f.clearcoat.map(|c| GltfClearcoat {
                 factor: c.factor * t.clearcoat.x,
                 roughness: c.roughness * t.clearcoat_roughness.y,
+            }),
+            sheen: f.sheen.map(|s| GltfSheen {
+                color: s.color * t.sheen_color.truncate(),
+                roughness: s.roughness * t.sheen_roughness.w,
             }),
             ..*f
         }

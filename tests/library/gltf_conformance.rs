@@ -570,13 +570,14 @@ fn an_unmodelled_extension_is_a_warning_and_morph_weights_are_applied() {
     v["meshes"][0]["primitives"][0]["targets"] = json!([{ "POSITION": position }]);
     v["meshes"][0]["weights"] = json!([0.5]);
     v["materials"][0]["extensions"] =
-        json!({"KHR_materials_sheen": {"sheenColorFactor": [1.0, 1.0, 1.0]}});
-    v["extensionsUsed"] = json!(["KHR_materials_sheen"]);
+        json!({"KHR_materials_iridescence": {"iridescenceFactor": 1.0}});
+    v["extensionsUsed"] = json!(["KHR_materials_iridescence"]);
     std::fs::write(&path, v.to_string()).unwrap();
     let scene = Scene::load(&path).unwrap();
     let w = scene.warnings().join("\n");
     assert_eq!(
-        w.matches("KHR_materials_sheen is not modelled").count(),
+        w.matches("KHR_materials_iridescence is not modelled")
+            .count(),
         1,
         "{w}"
     );
@@ -587,7 +588,7 @@ fn an_unmodelled_extension_is_a_warning_and_morph_weights_are_applied() {
     // An extension outside the materials (an environment light here) is
     // named once, for the file.
     let mut lit = v.clone();
-    lit["extensionsUsed"] = json!(["KHR_materials_sheen", "EXT_lights_image_based"]);
+    lit["extensionsUsed"] = json!(["KHR_materials_iridescence", "EXT_lights_image_based"]);
     std::fs::write(&path, lit.to_string()).unwrap();
     let w = Scene::load(&path).unwrap().warnings().join("\n");
     assert_eq!(

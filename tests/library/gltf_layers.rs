@@ -41,7 +41,7 @@ fn floor(base: f32, roughness: f32, specular: Value) -> Value {
 }
 
 /// The BRDF at the floor point straight below (x, z).
-fn brdf_at(scene: &Scene, x: f32, z: f32) -> Brdf {
+pub(crate) fn brdf_at(scene: &Scene, x: f32, z: f32) -> Brdf {
     let device = Device::new().unwrap();
     let committed = scene.clone().commit(&device).unwrap();
     let ray = Ray::new(Vec3::new(x, 0.5, z), Vec3::NEG_Y);
@@ -49,7 +49,7 @@ fn brdf_at(scene: &Scene, x: f32, z: f32) -> Brdf {
     scene.surface_brdf(&hit).unwrap()
 }
 
-fn pbr(b: Brdf) -> GltfPbr {
+pub(crate) fn pbr(b: Brdf) -> GltfPbr {
     match b {
         Brdf::GltfPbr(g) => g,
         other => panic!("a rough dielectric is the glTF BRDF, got {other:?}"),

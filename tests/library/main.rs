@@ -40,6 +40,7 @@ mod gltf_layers;
 mod gltf_meshopt;
 mod gltf_normal_texture;
 mod gltf_quantized;
+mod gltf_sheen;
 mod gltf_textures;
 mod gltf_validator;
 mod hostile;
