@@ -277,10 +277,17 @@ fn lit_sheet_scene() -> Scene {
 
 /// The photon render's image (four independent renders, 16 spp) sums to
 /// the path tracer's (two halves of 1024 spp) within their measured noise.
-fn assert_renders_agree(check: &str, scene: &Scene, (width, height): (u32, u32), seed: u64) {
+fn assert_renders_agree(check: &str, scene: &Scene, size: (u32, u32), seed: u64) {
+    assert_renders_agree_with(check, scene, RenderConfig::new(size.0, size.1), seed);
+}
+
+/// [`assert_renders_agree`] with the photon renders' settings `cfg` (its
+/// size, its cache).
+pub(crate) fn assert_renders_agree_with(check: &str, scene: &Scene, cfg: RenderConfig, seed: u64) {
     let tracer = Tracer::new(scene.clone().commit(&Device::new().unwrap()).unwrap());
     let prepared = tracer.prepared();
-    let mut cfg = RenderConfig::new(width, height);
+    let (width, height) = (cfg.width, cfg.height);
+    let mut cfg = cfg;
     cfg.show_emitters = false;
     let pixels = f64::from(width * height);
 
