@@ -36,6 +36,12 @@ fn functions() -> Vec<Named> {
             Some(plastic.with_clearcoat(1.0, 0.01).unwrap().into()),
             0.0,
         ),
+        // The plastic under a sheen of roughness 0.3 (KHR_materials_sheen).
+        (
+            "gltf-sheen0.3",
+            Some(plastic.with_sheen(Vec3::splat(0.8), 0.3).unwrap().into()),
+            0.0,
+        ),
         // Rough glass: the analysis over the whole sphere (reflection and
         // transmission).
         ("rough-glass0.3", Some(glass(0.09).into()), 0.0),
