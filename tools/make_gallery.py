@@ -120,6 +120,19 @@ def glass_ball(c, r, levels):
 SMOOTH = {"gold_sphere": GOLD_CENTRE, "glass_sphere": GLASS_CENTRE}
 
 
+def add_meshes(b, meshes, mat_index, smooth):
+    """Adds each (name, material name, positions, triangles) to builder `b`;
+    a mesh named in `smooth` (name -> sphere centre) gets per-vertex NORMALs
+    pointing away from its centre."""
+    for name, mat, pos, idx in meshes:
+        attributes = {}
+        if name in smooth:
+            centre = smooth[name]
+            attributes["NORMAL"] = b.vec3([unit(tuple(p[i] - centre[i] for i in range(3))) for p in pos])
+        attributes["POSITION"] = b.vec3(pos, bounds=True)
+        b.mesh(name, attributes, b.triangles(idx), mat_index[mat])
+
+
 def look_rotation(d):
     """Quaternion (x, y, z, w) turning local -z onto the unit vector d."""
     f = (0.0, 0.0, -1.0)
@@ -150,13 +163,7 @@ def main():
         ("glass_sphere", "glass", *glass_ball(GLASS_CENTRE, GLASS_RADIUS, GLASS_LEVELS)),
     ]
     b = gltf_build.Builder()
-    for name, mat, pos, idx in meshes:
-        attributes = {}
-        if name in SMOOTH:
-            centre = SMOOTH[name]
-            attributes["NORMAL"] = b.vec3([unit(tuple(p[i] - centre[i] for i in range(3))) for p in pos])
-        attributes["POSITION"] = b.vec3(pos, bounds=True)
-        b.mesh(name, attributes, b.triangles(idx), MAT[mat])
+    add_meshes(b, meshes, MAT, SMOOTH)
     spot_pos = (2.2, 2.8, -1.8)
     target = GOLD_CENTRE
     spot_dir = tuple(t - p for t, p in zip(target, spot_pos))

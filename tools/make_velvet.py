@@ -18,7 +18,7 @@ import math
 
 import gltf_build
 
-from make_gallery import box, quad, sphere, unit  # tools/ is first on sys.path
+from make_gallery import add_meshes, box, quad, sphere  # tools/ is first on sys.path
 
 W, H, D = 2.0, 2.5, 2.0  # half-width, height, half-depth
 RED_CENTRE = (-0.8, 0.5, 0.3)
@@ -64,13 +64,7 @@ def main():
         ("cushion", "lacquered_cushion", *box(-0.3, 0.5, 0.0, 0.3, -0.9, -0.2, 0.3)),
     ]
     b = gltf_build.Builder()
-    for name, mat, pos, idx in meshes:
-        attributes = {}
-        if name in SMOOTH:
-            centre = SMOOTH[name]
-            attributes["NORMAL"] = b.vec3([unit(tuple(p[i] - centre[i] for i in range(3))) for p in pos])
-        attributes["POSITION"] = b.vec3(pos, bounds=True)
-        b.mesh(name, attributes, b.triangles(idx), MAT[mat])
+    add_meshes(b, meshes, MAT, SMOOTH)
     # Outside the open front, 1.2 m up, looking 12 degrees down.
     tilt = math.radians(12.0)
     b.nodes.append({"name": "camera", "camera": 0, "translation": [0.0, 1.2, -3.6],
