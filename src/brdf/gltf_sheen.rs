@@ -93,8 +93,8 @@ impl Sheen {
     /// `weight(wo)` (what a layer above lets out towards it; 1 for the
     /// plain albedo), per channel, by [`hemisphere_quadrature`].
     pub(crate) fn albedo_weighted(&self, wi: Vec3, weight: impl Fn(Vec3) -> f32) -> Vec3 {
-        let r = self.roughness;
-        let e = hemisphere_quadrature(wi, |wo| modelled_lobe(wi, wo, r) * weight(wo));
+        let weight = &weight;
+        let e = lobe_albedo(wi, self.roughness, modelled_side, weight);
         self.color * e
     }
 }
@@ -121,8 +121,39 @@ fn charlie(cos_h: f32, alpha: f32) -> f32 {
     (2.0 + 1.0 / alpha) * sin2.powf(0.5 / alpha) / (2.0 * PI)
 }
 
-/// `D V` of a white lobe; 0 unless both directions are above the horizon.
-fn white_lobe(wi: Vec3, wo: Vec3, alpha: f32) -> f32 {
+/// What the lobe needs of one direction alone: its `Lambda`, and what the
+/// lobe is divided by on its account (1 for the fit's own lobe,
+/// `max(1, E_fit(cos))` for the modelled one).
+#[derive(Clone, Copy)]
+struct Side {
+    lambda: f32,
+    norm: f32,
+}
+
+/// The fit's own lobe's [`Side`] at cosine `cos`.
+fn fit_side(cos: f32, roughness: f32) -> Side {
+    Side {
+        lambda: lambda(cos, roughness * roughness),
+        norm: 1.0,
+    }
+}
+
+/// The modelled lobe's [`Side`] at cosine `cos`, from the fit's albedo
+/// table `fit`.
+fn modelled_side_of(fit: &[f32], cos: f32, roughness: f32) -> Side {
+    Side {
+        lambda: lambda(cos, roughness * roughness),
+        norm: 1f32.max(lookup(fit, cos, roughness)),
+    }
+}
+
+fn modelled_side(cos: f32, roughness: f32) -> Side {
+    modelled_side_of(&tables().fit, cos, roughness)
+}
+
+/// `D V` of a white lobe over the larger of its sides' norms; 0 unless
+/// both directions are above the horizon.
+fn lobe_of_sides(wi: Vec3, wo: Vec3, (si, so): (Side, Side), alpha: f32) -> f32 {
     if wi.z <= 0.0 || wo.z <= 0.0 {
         return 0.0;
     }
@@ -133,13 +164,38 @@ fn white_lobe(wi: Vec3, wo: Vec3, alpha: f32) -> f32 {
     }
     let d = charlie(sum.z / len, alpha);
     // Written symmetric in the two directions, bit for bit (reciprocity).
-    let v = 1.0 / ((1.0 + (lambda(wi.z, alpha) + lambda(wo.z, alpha))) * (4.0 * (wi.z * wo.z)));
-    let f = d * v;
+    let v = 1.0 / ((1.0 + (si.lambda + so.lambda)) * (4.0 * (wi.z * wo.z)));
+    let f = d * v / si.norm.max(so.norm);
     if f.is_finite() {
         f
     } else {
         0.0
     }
+}
+
+/// `D V` of the fit's white lobe.
+#[cfg(test)]
+fn white_lobe(wi: Vec3, wo: Vec3, roughness: f32) -> f32 {
+    let sides = (fit_side(wi.z, roughness), fit_side(wo.z, roughness));
+    lobe_of_sides(wi, wo, sides, roughness * roughness)
+}
+
+/// `integral lobe(wi, wo) weight(wo) cos_o dwo` for the white lobe whose
+/// sides `side` gives, by [`quadrature_by_rows`] (each row's side computed
+/// once).
+fn lobe_albedo(
+    wi: Vec3,
+    roughness: f32,
+    side: impl Fn(f32, f32) -> Side,
+    weight: &impl Fn(Vec3) -> f32,
+) -> f32 {
+    let alpha = roughness * roughness;
+    let si = side(wi.z, roughness);
+    let row = |cos_o: f32| {
+        let so = side(cos_o, roughness);
+        move |wo: Vec3| lobe_of_sides(wi, wo, (si, so), alpha) * weight(wo)
+    };
+    quadrature_by_rows(wi, row, QUAD_T, QUAD_PHI)
 }
 
 /// Rows of the cosine substitution `cos_o = t^2` (the lobe gathers at
@@ -152,14 +208,30 @@ const QUAD_PHI: usize = 32;
 /// `integral g(wo) cos_o dwo` over the upper hemisphere by the midpoint
 /// rule in `(t, phi)`, `cos_o = t^2`, for a `g` symmetric about the plane of
 /// `wi` and the normal.
-pub(crate) fn hemisphere_quadrature(wi: Vec3, g: impl Fn(Vec3) -> f32) -> f32 {
+#[cfg(test)]
+fn hemisphere_quadrature(wi: Vec3, g: impl Fn(Vec3) -> f32) -> f32 {
     hemisphere_quadrature_n(wi, g, QUAD_T, QUAD_PHI)
 }
 
+#[cfg(test)]
 fn hemisphere_quadrature_n(wi: Vec3, g: impl Fn(Vec3) -> f32, nt: usize, nphi: usize) -> f32 {
+    quadrature_by_rows(wi, |_| &g, nt, nphi)
+}
+
+/// The quadrature of [`hemisphere_quadrature`] with the integrand made
+/// per row, `row(cos_o)`, for what depends on `cos_o` alone.
+fn quadrature_by_rows<G: Fn(Vec3) -> f32>(
+    wi: Vec3,
+    row: impl Fn(f32) -> G,
+    nt: usize,
+    nphi: usize,
+) -> f32 {
     // The azimuth is measured from wi's own, so the grid's symmetry is the
     // lobe's whatever wi is.
     let phi_i = wi.y.atan2(wi.x);
+    let columns: Vec<(f32, f32)> = (0..nphi)
+        .map(|b| (phi_i + PI * (b as f32 + 0.5) / nphi as f32).sin_cos())
+        .collect();
     let mut sum = 0.0f64;
     for a in 0..nt {
         let t = (a as f32 + 0.5) / nt as f32;
@@ -167,13 +239,12 @@ fn hemisphere_quadrature_n(wi: Vec3, g: impl Fn(Vec3) -> f32, nt: usize, nphi: u
         let sin_o = (1.0 - cos_o * cos_o).max(0.0).sqrt();
         // dw cos_o = cos_o d(cos_o) dphi = t^2 2t dt dphi.
         let jacobian = f64::from(cos_o * 2.0 * t);
-        let mut row = 0.0f64;
-        for b in 0..nphi {
-            let phi = phi_i + PI * (b as f32 + 0.5) / nphi as f32;
-            let wo = Vec3::new(sin_o * phi.cos(), sin_o * phi.sin(), cos_o);
-            row += f64::from(g(wo));
+        let g = row(cos_o);
+        let mut sum_row = 0.0f64;
+        for &(sin, cos) in &columns {
+            sum_row += f64::from(g(Vec3::new(sin_o * cos, sin_o * sin, cos_o)));
         }
-        sum += row * jacobian;
+        sum += sum_row * jacobian;
     }
     // Both halves of the circle: 2 pi / nphi per column, 1 / nt per row.
     (sum * 2.0 * std::f64::consts::PI / (nphi * nt) as f64) as f32
@@ -200,7 +271,7 @@ fn mu_at(i: usize) -> f32 {
 /// The two tables, `[rough * MU_NODES + mu]`, read high (module docs).
 struct Tables {
     /// The directional albedo of the fit's white lobe `D V`.
-    raw: Vec<f32>,
+    fit: Vec<f32>,
     /// That of the lobe as modelled, `D V / max(1, raw(cos_i), raw(cos_o))`.
     lobe: Vec<f32>,
 }
@@ -208,30 +279,27 @@ struct Tables {
 fn tables() -> &'static Tables {
     static TABLES: OnceLock<Tables> = OnceLock::new();
     TABLES.get_or_init(|| {
-        let raw = read_high(|wi, wo, r| white_lobe(wi, wo, r * r));
-        let raw_at = |mu: f32, r: f32| lookup(&raw, mu, r);
-        let lobe = read_high(|wi, wo, r| {
-            white_lobe(wi, wo, r * r) / 1f32.max(raw_at(wi.z, r)).max(raw_at(wo.z, r))
-        });
-        Tables { raw, lobe }
+        let fit = read_high(|mu, r| lobe_albedo(incident(mu), r, fit_side, &|_| 1.0));
+        let modelled = |cos, r| modelled_side_of(&fit, cos, r);
+        let lobe = read_high(|mu, r| lobe_albedo(incident(mu), r, modelled, &|_| 1.0));
+        Tables { fit, lobe }
     })
 }
 
-/// `integral lobe(wi, wo, r) cos_o dwo` at cosine `mu` and roughness `r`.
-fn albedo_of(lobe: &impl Fn(Vec3, Vec3, f32) -> f32, mu: f32, r: f32) -> f32 {
-    let wi = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-    hemisphere_quadrature(wi, |wo| lobe(wi, wo, r))
+/// The incident direction of cosine `mu` (azimuth 0).
+fn incident(mu: f32) -> Vec3 {
+    Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu)
 }
 
-/// The table of `lobe`'s albedo, raised so that its bilinear interpolant
-/// does not read below the albedo between the nodes: each node goes up by
-/// the largest shortfall found at the middles of the edges and the centres
-/// of the cells around it, and by [`MARGIN`].
-fn read_high(lobe: impl Fn(Vec3, Vec3, f32) -> f32) -> Vec<f32> {
+/// The table of `albedo(mu, r)`, raised so that its bilinear interpolant
+/// does not read below it between the nodes: each node goes up by the
+/// largest shortfall found at the middles of the edges and the centres of
+/// the cells around it, and by [`MARGIN`].
+fn read_high(albedo: impl Fn(f32, f32) -> f32) -> Vec<f32> {
     let mut t = Vec::with_capacity(ROUGH_NODES * MU_NODES);
     for j in 0..ROUGH_NODES {
         for i in 0..MU_NODES {
-            t.push(albedo_of(&lobe, mu_at(i), rough_at(j)));
+            t.push(albedo(mu_at(i), rough_at(j)));
         }
     }
     // The shortfall of each cell, `[j * (MU_NODES - 1) + i]`.
@@ -243,7 +311,7 @@ fn read_high(lobe: impl Fn(Vec3, Vec3, f32) -> f32) -> Vec<f32> {
                 let x = (i as f32 + du) / (MU_NODES - 1) as f32;
                 let y = (j as f32 + dv) / (ROUGH_NODES - 1) as f32;
                 let (mu, r) = ((x * x).max(GRAZING), rough_from(y));
-                worst = worst.max(albedo_of(&lobe, mu, r) - lookup(&t, mu, r));
+                worst = worst.max(albedo(mu, r) - lookup(&t, mu, r));
             }
             short.push(worst);
         }
@@ -289,18 +357,15 @@ fn lookup(t: &[f32], mu: f32, roughness: f32) -> f32 {
 }
 
 /// The fit's white lobe `D V` as modelled: divided by
-/// `max(1, E_raw(cos_i), E_raw(cos_o))`, so that it never reflects more
+/// `max(1, E_fit(cos_i), E_fit(cos_o))`, so that it never reflects more
 /// than it receives (the fit's albedo exceeds 1 towards grazing incidence
 /// at small roughness); symmetric, so reciprocal.
 fn modelled_lobe(wi: Vec3, wo: Vec3, roughness: f32) -> f32 {
-    let f = white_lobe(wi, wo, roughness * roughness);
-    if f == 0.0 {
-        return 0.0;
-    }
-    let raw = &tables().raw;
-    f / 1f32
-        .max(lookup(raw, wi.z, roughness))
-        .max(lookup(raw, wo.z, roughness))
+    let sides = (
+        modelled_side(wi.z, roughness),
+        modelled_side(wo.z, roughness),
+    );
+    lobe_of_sides(wi, wo, sides, roughness * roughness)
 }
 
 /// `E(mu, r)`: the directional albedo of the modelled white sheen lobe of
@@ -361,13 +426,13 @@ mod tests {
             ] {
                 let (wi, wo) = (dir(ti, 0.0), dir(to, phi));
                 let want = spec_lobe(wi, wo, f64::from(r));
-                let got = f64::from(white_lobe(wi, wo, r * r));
+                let got = f64::from(white_lobe(wi, wo, r));
                 assert!(
                     (got - want).abs() <= 1e-4 * want.max(1e-3),
                     "r={r} ({ti}, {to}, {phi}): {got} vs {want}"
                 );
                 // Reciprocal.
-                assert_eq!(white_lobe(wi, wo, r * r), white_lobe(wo, wi, r * r));
+                assert_eq!(white_lobe(wi, wo, r), white_lobe(wo, wi, r));
             }
         }
     }
