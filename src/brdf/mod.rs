@@ -363,6 +363,7 @@ impl Brdf {
         };
         // The unused words are 0; +0.0 folds -0.0 into 0.0 so equal values
         // give equal bits.
+        debug_assert!(params.len() <= PARAM_WORDS, "{tag}: {}", params.len());
         let bits = std::array::from_fn(|k| (params.get(k).copied().unwrap_or(0.0) + 0.0).to_bits());
         (tag, bits)
     }
@@ -373,7 +374,8 @@ impl Brdf {
     pub fn key(&self) -> u64 {
         let (tag, bits) = self.param_bits();
         // The nine words the models had before the clear coat are hashed
-        // alone, so their keys (the analysis's seeds) stay what they were.
+        // alone, so their keys (the analysis's seeds) stay what they were;
+        // a coat hashes its eleven, a sheen all fifteen.
         let words = if tag == COATED_GLTF_TAG {
             &bits[..11]
         } else if tag == SHEEN_GLTF_TAG {
@@ -468,6 +470,11 @@ mod tests {
                 .unwrap()
                 .into(),
             GltfPbr::new(Vec3::new(0.8, 0.3, 0.2), 0.0, 0.25, 0.04)
+                .unwrap()
+                .into(),
+            GltfPbr::new(Vec3::new(0.8, 0.3, 0.2), 0.0, 0.25, 0.04)
+                .and_then(|b| b.with_sheen(Vec3::new(0.9, 0.6, 0.7), 0.2))
+                .and_then(|b| b.with_clearcoat(0.6, 0.04))
                 .unwrap()
                 .into(),
         ];

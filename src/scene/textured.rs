@@ -246,7 +246,7 @@ impl Scene {
     /// refuses those before shading).
     ///
     /// The untextured case is inlined into the shading loops: returned from
-    /// a call, the 52-byte BRDF was written by the callee and read back by
+    /// a call, the BRDF (52 bytes then, 68 now) was written by the callee and read back by
     /// the caller in wider loads, a store-forwarding stall at every hit that
     /// `perf annotate` put at 3 % of a render.
     #[inline]

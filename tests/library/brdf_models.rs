@@ -103,7 +103,11 @@ fn glossy_models() -> Vec<(&'static str, Brdf)> {
         ),
         (
             "gltf sheen r=0.07 and a coat over a glossy dielectric",
-            coated(gltf(0.5, 0.0, 0.3, 0.04), 0.7, 0.2),
+            coated(
+                sheened(gltf(0.5, 0.0, 0.3, 0.04), Vec3::splat(0.8), 0.07),
+                0.7,
+                0.2,
+            ),
         ),
     ]
 }
@@ -469,10 +473,14 @@ fn extremes_stay_finite() {
             .into(),
         GltfPbr::new(Vec3::ONE, 1.0, 1.0, 1.0).unwrap().into(),
         GltfPbr::new(Vec3::ZERO, 0.0, 1.0, 0.0).unwrap().into(),
+        // The sheen's fit grows without bound at grazing incidence, and its
+        // lobe is a spike at the smallest roughness.
+        sheened(gltf(1.0, 0.0, 1.0, 0.04), Vec3::ONE, 1.0),
+        sheened(gltf(1.0, 0.0, 0.5, 0.04), Vec3::ONE, 0.0),
     ];
     let mut r = Rng::new(11);
     for b in models {
-        for cos in [1.0f32, 0.5, 1e-3, 1e-6, 0.0] {
+        for cos in [1.0f32, 0.5, 1e-3, 1e-6, 1e-9, 0.0] {
             let wi = wi_at(cos);
             let a = b.albedo(wi);
             assert!(
@@ -531,4 +539,14 @@ fn keys_separate_parameters() {
     assert_eq!(a.key(), c.key());
     assert_ne!(a.key(), b.key());
     assert_ne!(a.key(), d.key());
+    // A sheen's colour and roughness each separate two glTF models.
+    let plastic = gltf(0.8, 0.0, 0.5, 0.04);
+    let velvet = sheened(plastic, Vec3::splat(0.6), 0.3);
+    assert_ne!(velvet.key(), plastic.key());
+    assert_ne!(velvet.key(), sheened(plastic, Vec3::splat(0.6), 0.31).key());
+    assert_ne!(
+        velvet.key(),
+        sheened(plastic, Vec3::new(0.6, 0.6, 0.61), 0.3).key()
+    );
+    assert_eq!(velvet.key(), sheened(plastic, Vec3::splat(0.6), 0.3).key());
 }
