@@ -407,7 +407,6 @@ pub(crate) fn white_albedo(mu: f32, roughness: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::Rng;
 
     /// The specification's lobe, in f64, as it writes it.
     fn spec_lobe(l: Vec3, v: Vec3, roughness: f64) -> f64 {
