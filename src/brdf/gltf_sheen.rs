@@ -101,7 +101,8 @@ impl Sheen {
 
     /// The lobe's albedo from `wi`, each reflected direction weighted by
     /// `weight(wo)` (what a layer above lets out towards it; 1 for the
-    /// plain albedo), per channel, by [`hemisphere_quadrature`].
+    /// plain albedo), per channel, by the tables' quadrature
+    /// ([`quadrature_by_rows`]).
     pub(crate) fn albedo_weighted(&self, wi: Vec3, weight: impl Fn(Vec3) -> f32) -> Vec3 {
         let weight = &weight;
         let e = lobe_albedo(wi, self.roughness, modelled_side, weight);
@@ -217,9 +218,8 @@ const QUAD_T: usize = 64;
 /// is symmetric about the plane of incidence).
 const QUAD_PHI: usize = 32;
 
-/// `integral g(wo) cos_o dwo` over the upper hemisphere by the midpoint
-/// rule in `(t, phi)`, `cos_o = t^2`, for a `g` symmetric about the plane of
-/// `wi` and the normal.
+/// [`quadrature_by_rows`] of one integrand `g` for every row, at the
+/// tables' resolution.
 #[cfg(test)]
 fn hemisphere_quadrature(wi: Vec3, g: impl Fn(Vec3) -> f32) -> f32 {
     hemisphere_quadrature_n(wi, g, QUAD_T, QUAD_PHI)
@@ -230,8 +230,11 @@ fn hemisphere_quadrature_n(wi: Vec3, g: impl Fn(Vec3) -> f32, nt: usize, nphi: u
     quadrature_by_rows(wi, |_| &g, nt, nphi)
 }
 
-/// The quadrature of [`hemisphere_quadrature`] with the integrand made
-/// per row, `row(cos_o)`, for what depends on `cos_o` alone.
+/// `integral g(wo) cos_o dwo` over the upper hemisphere by the midpoint
+/// rule in `(t, phi)`, `cos_o = t^2`, on `nt` rows and `nphi` columns over
+/// half the circle, for a `g` symmetric about the plane of `wi` and the
+/// normal; `g = row(cos_o)` is made once per row, for what depends on
+/// `cos_o` alone.
 fn quadrature_by_rows<G: Fn(Vec3) -> f32>(
     wi: Vec3,
     row: impl Fn(f32) -> G,

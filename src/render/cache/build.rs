@@ -317,7 +317,7 @@ struct FineCell {
 impl FineCell {
     /// The cell of side `cell` whose estimate is `e`, from the photons that
     /// are not samples (one in `stride` is one), over a kernel whose disc
-    /// the sample sees on a surface by `share` ([`kernel_share`]).
+    /// the sample sees on a surface by `share` ([`super::support::kernel_share`]).
     fn new(e: Estimate, share: f32, cell: f32, stride: u32, rep: u32, guide: PowerPerBin) -> Self {
         // Expected samples in the cell: the non-samples' density from the
         // kernel (`found` in `pi r^2`), over `stride - 1`, times the area.
