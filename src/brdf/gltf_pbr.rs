@@ -562,7 +562,10 @@ impl GltfPbr {
 }
 
 /// `integral e(mu) 2 mu dmu` over [0, 1] by the midpoint rule on 256 cells
-/// (the tables are piecewise linear in `mu`, so `e` is smooth within each).
+/// (the tables are piecewise linear in `mu` or `sqrt(mu)`, so `e` is
+/// smooth within each). `Coat::cosine_weighted_through` is the same rule
+/// with the coat's `T` inside; it keeps its own loop so that a coated
+/// model's albedo keeps the bits it had before the sheen.
 fn cosine_weighted(e: impl Fn(f32) -> f32) -> f32 {
     const N: usize = 256;
     let mut sum = 0.0;
