@@ -332,7 +332,6 @@ fn read_high(albedo: impl Fn(f32, f32) -> f32) -> Vec<f32> {
             short.push(worst);
         }
     }
-    let mut up = t.clone();
     for j in 0..ROUGH_NODES {
         for i in 0..MU_NODES {
             let mut raise = 0.0f32;
@@ -341,10 +340,10 @@ fn read_high(albedo: impl Fn(f32, f32) -> f32) -> Vec<f32> {
                     raise = raise.max(short[jj * (MU_NODES - 1) + ii]);
                 }
             }
-            up[j * MU_NODES + i] += 2.0 * raise + MARGIN;
+            t[j * MU_NODES + i] += 2.0 * raise + MARGIN;
         }
     }
-    up
+    t
 }
 
 /// What every node of the tables is raised by beyond twice the measured
@@ -488,7 +487,7 @@ mod tests {
     /// The modelled white lobe's albedo at `mu` by a quadrature of `nt` x
     /// `nphi` (the tables' is 64 x 32).
     fn albedo_by_quadrature(mu: f32, r: f32, nt: usize, nphi: usize) -> f32 {
-        let wi = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+        let wi = incident(mu);
         hemisphere_quadrature_n(wi, |wo| modelled_lobe(wi, wo, r), nt, nphi)
     }
 

@@ -417,22 +417,12 @@ fn json_info(v: &serde_json::Value) -> std::result::Result<gltf::json::texture::
 pub(super) fn clearcoat_of(
     m: &gltf::Material,
 ) -> std::result::Result<Option<GltfClearcoat>, String> {
-    let Some(v) = m.extension_value(CLEARCOAT) else {
+    let Some(v) = extension_object(m, CLEARCOAT)? else {
         return Ok(None);
     };
-    if !v.is_object() {
-        return Err(format!("{CLEARCOAT} is not a JSON object"));
-    }
-    let number = |key: &str| match v.get(key) {
-        None => Ok(0.0),
-        Some(x) => x
-            .as_f64()
-            .map(|x| x as f32)
-            .ok_or_else(|| format!("{CLEARCOAT} {key} is not a number")),
-    };
     Ok(Some(GltfClearcoat {
-        factor: number("clearcoatFactor")?,
-        roughness: number("clearcoatRoughnessFactor")?,
+        factor: json_number(v, CLEARCOAT, "clearcoatFactor")?,
+        roughness: json_number(v, CLEARCOAT, "clearcoatRoughnessFactor")?,
     }))
 }
 
@@ -444,26 +434,41 @@ pub(super) fn clearcoat_of(
 /// `sheenColorFactor` is not three numbers or `sheenRoughnessFactor` is not
 /// a number.
 pub(super) fn sheen_of(m: &gltf::Material) -> std::result::Result<Option<GltfSheen>, String> {
-    let Some(v) = m.extension_value(SHEEN) else {
+    let Some(v) = extension_object(m, SHEEN)? else {
         return Ok(None);
     };
-    if !v.is_object() {
-        return Err(format!("{SHEEN} is not a JSON object"));
-    }
     let color = match v.get("sheenColorFactor") {
         None => Vec3::ZERO,
         Some(x) => {
             rgb_of(x).ok_or_else(|| format!("{SHEEN} sheenColorFactor is not three numbers"))?
         }
     };
-    let roughness = match v.get("sheenRoughnessFactor") {
-        None => 0.0,
+    Ok(Some(GltfSheen {
+        color,
+        roughness: json_number(v, SHEEN, "sheenRoughnessFactor")?,
+    }))
+}
+
+/// Material `m`'s extension `ext` as a JSON object; `None` without it.
+fn extension_object<'a>(
+    m: &'a gltf::Material,
+    ext: &str,
+) -> std::result::Result<Option<&'a serde_json::Value>, String> {
+    match m.extension_value(ext) {
+        Some(v) if !v.is_object() => Err(format!("{ext} is not a JSON object")),
+        v => Ok(v),
+    }
+}
+
+/// The number `key` of extension `ext`'s object `v`, 0 when absent.
+fn json_number(v: &serde_json::Value, ext: &str, key: &str) -> std::result::Result<f32, String> {
+    match v.get(key) {
+        None => Ok(0.0),
         Some(x) => x
             .as_f64()
             .map(|x| x as f32)
-            .ok_or_else(|| format!("{SHEEN} sheenRoughnessFactor is not a number"))?,
-    };
-    Ok(Some(GltfSheen { color, roughness }))
+            .ok_or_else(|| format!("{ext} {key} is not a number")),
+    }
 }
 
 /// A JSON array of three numbers as RGB.

@@ -283,11 +283,15 @@ fn assert_renders_agree(check: &str, scene: &Scene, size: (u32, u32), seed: u64)
 
 /// [`assert_renders_agree`] with the photon renders' settings `cfg` (its
 /// size, its cache).
-pub(crate) fn assert_renders_agree_with(check: &str, scene: &Scene, cfg: RenderConfig, seed: u64) {
+pub(crate) fn assert_renders_agree_with(
+    check: &str,
+    scene: &Scene,
+    mut cfg: RenderConfig,
+    seed: u64,
+) {
     let tracer = Tracer::new(scene.clone().commit(&Device::new().unwrap()).unwrap());
     let prepared = tracer.prepared();
     let (width, height) = (cfg.width, cfg.height);
-    let mut cfg = cfg;
     cfg.show_emitters = false;
     let pixels = f64::from(width * height);
 
